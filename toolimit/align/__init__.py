@@ -1,0 +1,1 @@
+"""Stage (ii): align a scene to a demonstration (keypoints, parameter sampler, search)."""

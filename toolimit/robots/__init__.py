@@ -1,0 +1,1 @@
+"""Robot models by name (Pinocchio), each carrying a tool frame."""

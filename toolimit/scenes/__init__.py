@@ -1,0 +1,15 @@
+"""Scenes: simulated worlds a tool moves through (planar on pymunk, 3D batched particles)."""
+
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, Scene, SceneParams
+from toolimit.scenes.registry import available_scenes, make_scene, register_scene
+
+__all__ = [
+    "CONTROL_FPS",
+    "InvalidSceneParameters",
+    "ParameterSpec",
+    "Scene",
+    "SceneParams",
+    "available_scenes",
+    "make_scene",
+    "register_scene",
+]

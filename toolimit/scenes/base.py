@@ -1,0 +1,104 @@
+"""The scene protocol: one interface for every tool and both worlds (planar and 3D).
+
+A scene is a small simulated world that a tool moves through kinematically. Alignment samples its
+parameters, replays a demonstration in it and reads the goal reward; robot execution and learning
+use the same calls. Frames: world, metres, z up, ground at z = 0; planar scenes use the plane they
+document (x-z vertical plane or x-y horizontal plane) and ignore the other coordinate.
+
+Scenes are *batched*: ``reset(..., batch_size=B)`` creates B independent instances of the same
+parameters, each with its own randomness (sand jitter, grass placement), so the 10 replays of an
+alignment sample run as one call. Every per-instance quantity has the batch on axis 0; B = 1 is the
+ordinary case.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Mapping, Protocol, runtime_checkable
+
+import numpy as np
+
+from toolimit.tools import ToolPose
+
+#: Control rate of the paper: scenes step the tool at this rate and sub-step their physics.
+CONTROL_FPS = 24.0
+
+#: Scene parameter values: a position parameter is a (3,) world point, a uniform one a float.
+SceneParams = Mapping[str, "np.ndarray | float"]
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One scene parameter and how alignment samples it.
+
+    Attributes:
+        name: key in the parameter mapping.
+        kind: ``"position"``: a world point (3,) of a scene element, sampled by alignment from the
+            Gaussian mixture around the demonstration's keypoints; ``"uniform"``: a scalar sampled
+            uniformly in ``[low, high]``.
+        low, high: for ``"uniform"``, the bounds (floats); for ``"position"``, (3,) bounds of the
+            element's admissible position relative to nothing (world frame), used to reject samples.
+        on_ground: for ``"position"``: the element stands on the ground, so alignment sets z = 0.
+        unit: unit of a uniform parameter ("m", "rad", ...), for reports.
+        description: one line for reports and notebooks.
+    """
+
+    name: str
+    kind: Literal["position", "uniform"]
+    low: float | tuple[float, float, float]
+    high: float | tuple[float, float, float]
+    on_ground: bool = True
+    unit: str = ""
+    description: str = ""
+
+
+class InvalidSceneParameters(ValueError):
+    """Parameters that make a scene impossible (overlap, out of bounds); the message says why."""
+
+
+@runtime_checkable
+class Scene(Protocol):
+    """What every scene offers. See the module docstring for frames and batching.
+
+    Attributes:
+        tool: the tool name this scene is for ("spade", "hammer", "scythe").
+        world: "planar" or "3d".
+        control_dt: time of one ``step``, seconds (1 / CONTROL_FPS unless built otherwise).
+        parameters: the parameter specs, in a fixed order.
+        batch_size: B, the number of instances since the last ``reset``.
+    """
+
+    tool: str
+    world: str
+    control_dt: float
+    parameters: tuple[ParameterSpec, ...]
+    batch_size: int
+
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make a valid scene (overlap, out of bounds), or None if it can."""
+
+    def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
+        """Build B instances with these parameters; raises InvalidSceneParameters if invalid.
+
+        The tool is absent until the first ``step``, which places it without velocity.
+        """
+
+    def step(self, tool_pose: ToolPose) -> None:
+        """Move the tool kinematically to ``tool_pose`` over ``control_dt`` and simulate.
+
+        ``tool_pose`` arrays are (3,) and (3, 3) for all instances, or (B, 3) and (B, 3, 3). The
+        tool's velocity is the pose difference over ``control_dt``, so impacts transfer momentum.
+        """
+
+    def goal_reward(self) -> np.ndarray:
+        """(B,) sparse goal reward now (spade: spheres in the box; hammer: 1 if the nail is in;
+        scythe: stalks cut)."""
+
+    def dense_reward(self) -> np.ndarray:
+        """(B,) dense shaping reward of the paper's appendix, for the dense-reward baseline."""
+
+    def is_success(self) -> np.ndarray:
+        """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Arrays describing the current state of instance 0 for views (element positions, ...)."""

@@ -1,0 +1,1 @@
+"""3D scenes: batched, vectorised numpy worlds with Pinocchio/coal geometry."""

@@ -1,0 +1,1 @@
+"""Visualisation: meshcat scenes and animations, rerun recordings. Never imported by stages."""
