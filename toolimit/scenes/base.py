@@ -100,5 +100,13 @@ class Scene(Protocol):
     def is_success(self) -> np.ndarray:
         """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
 
+    def footprints(self) -> np.ndarray:
+        """(M, 5) ground rectangles occupied by scene elements of instance 0, world x-y plane:
+        centre x, centre y (m), half-length along the element's own x, half-width (m), yaw (rad).
+
+        A robot base must not stand inside one. Planar x-z scenes give a large half-width (their
+        elements span the y axis).
+        """
+
     def snapshot(self) -> dict[str, np.ndarray]:
         """Arrays describing the current state of instance 0 for views (element positions, ...)."""
