@@ -1,0 +1,112 @@
+"""Synthetic demonstrations have the described task properties, human timing and seeded noise."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from toolimit.demos import DemoError, synthesize_demo, synthesize_motion
+from toolimit.tools import tool_spec
+
+CASES = [(seed, 24) for seed in range(6)] + [(6, 30), (7, 30)]
+
+
+def _rest_speed(demo, frames: slice) -> float:
+    return float(np.max(demo.speed()[frames]))
+
+
+@pytest.mark.parametrize("tool", ["spade", "hammer", "scythe"])
+@pytest.mark.parametrize("seed, fps", CASES)
+def test_common_properties(tool, seed, fps):
+    motion = synthesize_motion(tool, seed, fps)
+    clean, noisy = motion.clean, motion.noisy
+    assert clean.tool == tool and clean.fps == fps
+    assert 2.5 <= clean.duration <= 6.0
+    np.testing.assert_allclose(clean.lengths, tool_spec(tool).length, atol=1e-9)
+    assert _rest_speed(clean, slice(0, 3)) < 0.05 and _rest_speed(clean, slice(-3, None)) < 0.05
+    assert clean.head[:, 2].min() > 0.0 and clean.handle[:, 2].min() > 0.0
+    assert clean.speed().max() < 4.5
+    # Noise: a few mm everywhere but the outliers, which are 2-6 % of frames and off by > 5 cm.
+    error = np.maximum(np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1))
+    inliers = np.setdiff1d(np.arange(clean.n_frames), motion.outlier_frames)
+    assert 0.002 <= motion.jitter <= 0.005
+    assert np.median(error[inliers]) < 0.012 and error[inliers].max() < 0.03
+    assert 1 <= motion.outlier_frames.size <= 0.07 * clean.n_frames
+    assert np.all(error[motion.outlier_frames] > 0.05)
+
+
+@pytest.mark.parametrize("seed, fps", CASES)
+def test_spade_scoops_at_ground_level_carries_level_and_dumps(seed, fps):
+    motion = synthesize_motion("spade", seed, fps)
+    demo, events = motion.clean, motion.events
+    entry, push_end = events["scoop"]
+    scoop = demo.head[entry : push_end + 1]
+    assert np.all((scoop[:, 2] >= 0.0) & (scoop[:, 2] <= 0.05))
+    assert 0.15 <= np.linalg.norm(scoop[-1, :2] - scoop[0, :2]) <= 0.26
+    start, end = events["carry"]
+    carry = demo.head[start : end + 1]
+    assert 0.4 <= np.linalg.norm(carry[-1, :2] - carry[0, :2]) <= 0.9
+    assert np.ptp(carry[:, 2]) < 0.04 and 0.3 <= carry[:, 2].mean() <= 0.5
+    _, dumped = events["dump"]
+    assert 0.25 <= demo.head[dumped, 2] <= 0.5
+    assert np.linalg.norm(demo.head[dumped, :2] - demo.head[end, :2]) < 0.08  # poured where carried
+    # The blade turns to pour: the tool axis steepens from under 30 to over 65 degrees.
+    elevation = np.degrees(np.arcsin(demo.axis[:, 2]))
+    assert elevation[end] < 30 and elevation[dumped] > 65
+
+
+@pytest.mark.parametrize("seed, fps", CASES)
+def test_hammer_strikes_the_same_height_fast_and_face_down(seed, fps):
+    motion = synthesize_motion("hammer", seed, fps)
+    demo, impacts = motion.clean, motion.events["impacts"]
+    nail = motion.params["nail_height"]
+    assert 2 <= len(impacts) <= 4
+    np.testing.assert_allclose(demo.head[impacts, 2], nail, atol=1e-9)
+    assert demo.head[:, 2].min() >= nail - 1e-9
+    for impact, previous in zip(impacts, [0] + impacts[:-1]):
+        velocity = (demo.head[impact] - demo.head[impact - 1]) * fps  # what a video would show
+        assert 2.0 <= np.linalg.norm(velocity) <= 4.0
+        across = velocity - np.dot(velocity, demo.axis[impact]) * demo.axis[impact]
+        assert across[2] / np.linalg.norm(across) < -0.9  # the striking face moves down
+        assert abs(demo.axis[impact, 2]) < np.sin(np.radians(15))  # handle nearly level at impact
+        assert 0.2 <= demo.head[previous:impact, 2].max() - nail <= 0.35
+        rebound = demo.head[impact + 1 : impact + 6, 2] - nail
+        assert 0.0 < rebound.max() < 0.07
+
+
+@pytest.mark.parametrize("seed, fps", CASES)
+def test_scythe_sweeps_low_wide_and_fast(seed, fps):
+    motion = synthesize_motion("scythe", seed, fps)
+    demo, sweeps = motion.clean, motion.events["sweeps"]
+    assert 1 <= len(sweeps) <= 3
+    for start, end in sweeps:
+        blade = demo.head[start : end + 1]
+        assert np.all((blade[:, 2] >= 0.02) & (blade[:, 2] <= 0.06))
+        inward = demo.axis[start : end + 1, :2]
+        turned = np.degrees(np.ptp(np.unwrap(np.arctan2(inward[:, 1], inward[:, 0]))))
+        assert 120 <= turned <= 160
+        chord = np.linalg.norm(blade[-1, :2] - blade[0, :2])
+        assert 2 * 0.6 * np.sin(np.radians(60)) <= chord <= 2.0
+        assert 2.0 <= np.linalg.norm(demo.head_velocity()[(start + end) // 2]) <= 4.0
+    if len(sweeps) > 1:  # the mower steps forward between sweeps
+        first, last = demo.head[sweeps[0][0]], demo.head[sweeps[-1][0]]
+        assert 0.1 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7
+
+
+def test_determinism_and_variety():
+    for tool in ("spade", "hammer", "scythe"):
+        a, b = synthesize_demo(tool, 3), synthesize_demo(tool, 3)
+        np.testing.assert_array_equal(a.head, b.head)
+        np.testing.assert_array_equal(a.handle, b.handle)
+        c = synthesize_demo(tool, 4)
+        assert a.n_frames != c.n_frames or not np.allclose(a.head, c.head)
+        clean = synthesize_demo(tool, 3, noise=False)
+        np.testing.assert_array_equal(clean.head, synthesize_motion(tool, 3).clean.head)
+        assert not np.allclose(clean.head, a.head)
+
+
+def test_bad_arguments():
+    with pytest.raises(DemoError, match="no synthetic demonstrations for 'rake'"):
+        synthesize_demo("rake", 0)
+    with pytest.raises(DemoError, match="fps must be positive"):
+        synthesize_demo("spade", 0, fps=0)

@@ -1,0 +1,323 @@
+"""The 3D hammer world: drive a nail into a board with a kinematic hammer.
+
+World frame: metres, z up, ground at z = 0. The nail is a square head plate on a shank; it slides
+on a 1-DoF vertical guide. Its **head top** starts at the parameter ``nail_position`` (x, y, z),
+with the head plate's underside ``protrusion`` (default 50 mm) above the board's top surface; the
+board is a block standing on the ground under the nail. The nail is *planted* when less than
+``planted_tolerance`` (1 mm) is left between the plate's underside and the board.
+
+Impact model (the hammer is kinematic, i.e. infinitely heavy). Each control step (1/24 s) is split
+into ``substeps``; over each the hammer head box moves at constant velocity. Points sampled on the
+head box's surface are tested against the plate's top plane **along their swept segments**, so a
+4 m/s strike (17 mm per sub-step) cannot pass through the 10 mm plate. A point that was at or above
+the plate top at the start of the sub-step and is below it at the end, crossing it inside the
+plate's square, pushes the nail down to that point and gives it the point's downward speed times
+``1 + restitution`` (an infinitely heavy striker; ``restitution = 0`` by default: the nail moves
+with the face). Between pushes the nail decelerates under a constant Coulomb-like resistance of
+the wood, ``entry_deceleration`` a (m/s^2), so a strike that stops at contact with speed v drives
+the nail ``v^2 / (2 a)`` further (a = 100 m/s^2: 2 m/s -> 20 mm, 3 m/s -> 45 mm, a 0.3 m/s tap
+-> 0.45 mm). The nail stops on the board (travel range 0 .. protrusion <= guide_travel). The hammer
+is not stopped by the nail or the board (a kinematic tool), and the shank is not a collision body.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.spatial.tool_geometry import tool_boxes
+from toolimit.scenes.spatial.tool_motion import batched_pose, interpolate_poses
+from toolimit.tools import ToolPose
+
+
+def box_surface_points(half_extents: np.ndarray, per_edge: int = 5) -> np.ndarray:
+    """(P, 3) points on the surface of a box centred at 0 with ``half_extents`` (3,), metres.
+
+    A ``per_edge`` x ``per_edge`` grid on each face (edges and corners included), duplicates
+    removed: enough for the lowest point of a tilted face to be found within a few millimetres.
+    """
+    grid = np.linspace(-1.0, 1.0, per_edge)
+    points = []
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        u, v = np.meshgrid(grid, grid, indexing="ij")
+        for sign in (-1.0, 1.0):
+            face = np.zeros((u.size, 3))
+            face[:, axis] = sign
+            face[:, others[0]] = u.ravel()
+            face[:, others[1]] = v.ravel()
+            points.append(face)
+    unit = np.unique(np.round(np.concatenate(points), 12), axis=0)
+    return unit * np.asarray(half_extents, dtype=float)
+
+
+class SpatialHammerScene:
+    """Batched 3D nail-hammering scene (see the module docstring for the physics).
+
+    Args:
+        protrusion: initial height of the head plate's underside above the board, m (the travel).
+        guide_travel: length of the nail's vertical guide, m; ``protrusion`` must not exceed it.
+        plate_half_size: half side of the square head plate, m.
+        plate_thickness: head plate thickness, m.
+        shank_radius, shank_length: the shank (for views only), m.
+        board_half_size: half side of the square board under the nail, m.
+        entry_deceleration: deceleration of the moving nail by the wood, m/s^2.
+        restitution: e; the struck nail leaves at (1 + e) times the face's downward speed.
+        planted_tolerance: the nail is planted when less than this is left, m.
+        success_window: the nail must be planted within this many seconds of the tool's placement
+            (the first ``step``, time 0) for success (the paper: "within the first second"); as in
+            the planar worlds.
+        substeps: physics sub-steps per control step.
+        control_dt: duration of one ``step``, s.
+    """
+
+    tool = "hammer"
+    world = "3d"
+
+    def __init__(
+        self,
+        protrusion: float = 0.05,
+        guide_travel: float = 0.10,
+        plate_half_size: float = 0.03,
+        plate_thickness: float = 0.01,
+        shank_radius: float = 0.003,
+        shank_length: float = 0.10,
+        board_half_size: float = 0.15,
+        entry_deceleration: float = 100.0,
+        restitution: float = 0.0,
+        planted_tolerance: float = 0.001,
+        success_window: float = 1.0,
+        substeps: int = 10,
+        control_dt: float = 1.0 / CONTROL_FPS,
+    ) -> None:
+        positive = dict(
+            protrusion=protrusion,
+            guide_travel=guide_travel,
+            plate_half_size=plate_half_size,
+            plate_thickness=plate_thickness,
+            shank_radius=shank_radius,
+            shank_length=shank_length,
+            board_half_size=board_half_size,
+            entry_deceleration=entry_deceleration,
+            planted_tolerance=planted_tolerance,
+            success_window=success_window,
+            control_dt=control_dt,
+        )
+        for name, value in positive.items():
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        if protrusion > guide_travel:
+            raise ValueError(f"protrusion ({protrusion} m) exceeds the guide travel ({guide_travel} m)")
+        if not 0.0 <= restitution <= 1.0:
+            raise ValueError(f"restitution must be in [0, 1], got {restitution!r}")
+        if int(substeps) < 1:
+            raise ValueError(f"substeps must be >= 1, got {substeps!r}")
+        self.protrusion = float(protrusion)
+        self.guide_travel = float(guide_travel)
+        self.plate_half_size = float(plate_half_size)
+        self.plate_thickness = float(plate_thickness)
+        self.shank_radius = float(shank_radius)
+        self.shank_length = float(shank_length)
+        self.board_half_size = float(board_half_size)
+        self.entry_deceleration = float(entry_deceleration)
+        self.restitution = float(restitution)
+        self.planted_tolerance = float(planted_tolerance)
+        self.success_window = float(success_window)
+        self.substeps = int(substeps)
+        self.control_dt = float(control_dt)
+        head = tool_boxes("hammer")[0]
+        #: (P, 3) points on the hammer head box's surface (tool_geometry's head box), tool frame, m.
+        self.head_points = head.center + box_surface_points(head.half_extents) @ head.rotation.T
+        lowest_head_top = self.plate_thickness + self.protrusion
+        self.parameters = (
+            ParameterSpec(
+                "nail_position",
+                "position",
+                low=(-5.0, -5.0, lowest_head_top),
+                high=(5.0, 5.0, 1.5),
+                on_ground=False,
+                unit="m",
+                description="initial top of the nail head (the board's top is "
+                f"{lowest_head_top * 1000:.0f} mm below it)",
+            ),
+        )
+        self.batch_size = 0
+        self._nail_xy = np.zeros(2)
+        self._start_top = 0.0
+
+    # ----------------------------------------------------------------------------- parameters
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make this scene, or None."""
+        if "nail_position" not in params:
+            return "missing parameter 'nail_position'"
+        position = np.asarray(params["nail_position"], dtype=float)
+        if position.shape != (3,):
+            return f"nail_position must have shape (3,), got {position.shape}"
+        if not np.all(np.isfinite(position)):
+            return f"nail_position must be finite, got {position.tolist()}"
+        spec = self.parameters[0]
+        low, high = np.asarray(spec.low), np.asarray(spec.high)
+        if np.any(position < low) or np.any(position > high):
+            return (
+                f"nail_position {np.round(position, 4).tolist()} is outside [{low.tolist()}, {high.tolist()}] "
+                "(the board under the nail must stand on the ground)"
+            )
+        return None
+
+    def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
+        """Build B nails at ``params["nail_position"]``; the hammer is absent until ``step``.
+
+        The scene has no randomness; ``rng`` is accepted for the protocol.
+        """
+        reason = self.invalid_reason(params)
+        if reason is not None:
+            raise InvalidSceneParameters(reason)
+        if int(batch_size) < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+        position = np.asarray(params["nail_position"], dtype=float)
+        self.batch_size = int(batch_size)
+        self._nail_xy = position[:2].copy()
+        self._start_top = float(position[2])
+        b = self.batch_size
+        self.nail_top = np.full(b, self._start_top)  # (B,) z of the head top, m
+        self.nail_speed = np.zeros(b)  # (B,) downward speed, m/s
+        self.time = 0.0  # s since the tool was placed
+        self.planted_time = np.full(b, np.inf)  # (B,) s
+        self.tool_position: np.ndarray | None = None  # (B, 3) world, m
+        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
+
+    # ---------------------------------------------------------------------------- geometry
+    @property
+    def board_top(self) -> float:
+        """z of the board's top surface, m."""
+        return self._start_top - self.plate_thickness - self.protrusion
+
+    @property
+    def lowest_top(self) -> float:
+        """z of the nail head top when the plate rests on the board, m."""
+        return self._start_top - self.protrusion
+
+    def remaining_depth(self) -> np.ndarray:
+        """(B,) distance still to drive the nail, m (0 = head plate on the board)."""
+        return self.nail_top - self.lowest_top
+
+    # -------------------------------------------------------------------------------- physics
+    def step(self, tool_pose: ToolPose) -> None:
+        """Move the hammer to ``tool_pose`` over ``control_dt`` and simulate the nail."""
+        if self.batch_size == 0:
+            raise RuntimeError("call reset() before step()")
+        position, rotation = batched_pose(tool_pose, self.batch_size)
+        if self.tool_position is None:
+            self.tool_position, self.tool_rotation = position, rotation
+            return
+        fractions = np.arange(self.substeps + 1) / self.substeps
+        positions, rotations = interpolate_poses(self.tool_position, self.tool_rotation, position, rotation, fractions)
+        # (S+1, B, P, 3) head surface points in the world frame.
+        points = positions[:, :, None, :] + np.einsum("sbij,pj->sbpi", rotations, self.head_points)
+        if self._may_interact(points):
+            dt = self.control_dt / self.substeps
+            for k in range(self.substeps):
+                self._substep(points[k], points[k + 1], dt)
+        else:
+            self.time += self.control_dt
+        self.tool_position, self.tool_rotation = position, rotation
+
+    def _may_interact(self, points: np.ndarray) -> bool:
+        """Whether any nail moves or may be struck by head points (S+1, B, P, 3) in this step.
+
+        Conservative: a push needs a point below the nail top at the end of a sub-step, within the
+        plate's square widened by the largest x-y move of a point in one sub-step. When false,
+        sub-stepping would change nothing but the clock.
+        """
+        if np.any(self.nail_speed > 0.0):
+            return True
+        reach = self.plate_half_size + np.max(np.abs(np.diff(points[..., :2], axis=0)), initial=0.0)
+        low = points[..., 2] < self.nail_top[None, :, None]
+        near = np.all(np.abs(points[..., :2] - self._nail_xy) <= reach, axis=-1)
+        return bool(np.any(low & near))
+
+    def _substep(self, start: np.ndarray, end: np.ndarray, dt: float) -> None:
+        """Advance the nails by ``dt`` while head points move from ``start`` to ``end`` (B, P, 3)."""
+        top_before = self.nail_top.copy()
+        # Free motion: constant deceleration until the nail stops.
+        speed = self.nail_speed
+        glide_time = np.minimum(dt, speed / self.entry_deceleration)
+        glide = speed * glide_time - 0.5 * self.entry_deceleration * glide_time**2
+        top = self.nail_top - glide
+        speed = np.maximum(speed - self.entry_deceleration * dt, 0.0)
+        # Swept test of every head point against the plate's top plane.
+        z0, z1 = start[..., 2], end[..., 2]
+        descending = z0 > z1
+        crossing = descending & (z0 >= top_before[:, None] - 1e-9) & (z1 < top[:, None])
+        fraction = np.clip((z0 - top[:, None]) / np.where(descending, z0 - z1, 1.0), 0.0, 1.0)
+        xy = start[..., :2] + fraction[..., None] * (end[..., :2] - start[..., :2])
+        inside = np.all(np.abs(xy - self._nail_xy) <= self.plate_half_size, axis=-1)
+        contact = crossing & inside  # (B, P)
+        hit = np.any(contact, axis=1)
+        pushed_top = np.min(np.where(contact, z1, np.inf), axis=1)
+        face_speed = np.max(np.where(contact, (z0 - z1) / dt, 0.0), axis=1)
+        top = np.where(hit, np.minimum(top, pushed_top), top)
+        speed = np.where(hit, np.maximum(speed, (1.0 + self.restitution) * face_speed), speed)
+        # The board stops the nail.
+        on_board = top <= self.lowest_top
+        self.nail_top = np.maximum(top, self.lowest_top)
+        self.nail_speed = np.where(on_board, 0.0, speed)
+        self.time += dt
+        planted = self.remaining_depth() < self.planted_tolerance
+        self.planted_time = np.where(planted & np.isinf(self.planted_time), self.time, self.planted_time)
+
+    # -------------------------------------------------------------------------------- rewards
+    def goal_reward(self) -> np.ndarray:
+        """(B,) 1.0 where less than ``planted_tolerance`` of the nail is left, else 0.0."""
+        return (self.remaining_depth() < self.planted_tolerance).astype(float)
+
+    def dense_reward(self) -> np.ndarray:
+        """(B,) driven fraction of the protrusion minus the hammer head's distance to the nail (m).
+
+        The distance is from the tool-frame origin (hammer head centre) to the nail head's top
+        centre, 0 before the tool is placed. Same form as the planar hammer (bring the head to the
+        nail, reward the nail's progress); the paper's appendix coefficients are not reproduced.
+        """
+        progress = (self._start_top - self.nail_top) / self.protrusion
+        if self.tool_position is None:
+            return progress
+        nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), self.nail_top])
+        return progress - np.linalg.norm(self.tool_position - nail_head, axis=1)
+
+    def is_success(self) -> np.ndarray:
+        """(B,) planted within ``success_window`` seconds of the tool's placement."""
+        return self.planted_time <= self.success_window + 1e-9
+
+    # ---------------------------------------------------------------------------------- views
+    def footprints(self) -> np.ndarray:
+        """(1, 5) the board: centre x, y, half-length, half-width (m), yaw (rad)."""
+        x, y = self._nail_xy
+        return np.array([[x, y, self.board_half_size, self.board_half_size, 0.0]])
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Instance 0 for views: world-frame boxes (centre, half extents), nail state, tool pose.
+
+        Keys: ``nail_top`` (3,) head top; ``plate_center``/``plate_half_extents``,
+        ``shank_center``/``shank_half_extents``, ``board_center``/``board_half_extents`` (3,) m;
+        ``remaining_depth`` () m; ``tool_position`` (3,), ``tool_rotation`` (3, 3) (NaN before the
+        first step); ``time`` () s.
+        """
+        x, y = self._nail_xy
+        top = self.nail_top[0]
+        plate_half = np.array([self.plate_half_size, self.plate_half_size, self.plate_thickness / 2])
+        shank_half = np.array([self.shank_radius, self.shank_radius, self.shank_length / 2])
+        board_half = np.array([self.board_half_size, self.board_half_size, self.board_top / 2])
+        placed = self.tool_position is not None
+        return {
+            "nail_top": np.array([x, y, top]),
+            "plate_center": np.array([x, y, top - self.plate_thickness / 2]),
+            "plate_half_extents": plate_half,
+            "shank_center": np.array([x, y, top - self.plate_thickness - self.shank_length / 2]),
+            "shank_half_extents": shank_half,
+            "board_center": np.array([x, y, self.board_top / 2]),
+            "board_half_extents": board_half,
+            "remaining_depth": np.array(self.remaining_depth()[0]),
+            "tool_position": self.tool_position[0].copy() if placed else np.full(3, np.nan),
+            "tool_rotation": self.tool_rotation[0].copy() if placed else np.full((3, 3), np.nan),
+            "time": np.array(self.time),
+        }

@@ -1,0 +1,56 @@
+"""Kinematic tool motion shared by the 3D hammer and scythe scenes.
+
+A scene's ``step`` receives the tool pose at the end of a control step; between the previous and
+the new pose the tool moves at constant linear and angular velocity (straight line for the head
+point, geodesic for the rotation). Scenes sub-step this motion so that fast strikes and sweeps are
+tested for contact along their path, not only at the control instants.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from toolimit.tools import ToolPose
+
+
+def batched_pose(tool_pose: ToolPose, batch_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pose as (B, 3) positions and (B, 3, 3) rotations, broadcasting a single pose.
+
+    Raises ValueError naming the bad shape or non-finite value.
+    """
+    position = np.asarray(tool_pose.position, dtype=float)
+    rotation = np.asarray(tool_pose.rotation, dtype=float)
+    if position.shape not in ((3,), (batch_size, 3)):
+        raise ValueError(f"tool_pose.position must have shape (3,) or ({batch_size}, 3), got {position.shape}")
+    if rotation.shape not in ((3, 3), (batch_size, 3, 3)):
+        raise ValueError(
+            f"tool_pose.rotation must have shape (3, 3) or ({batch_size}, 3, 3), got {rotation.shape}"
+        )
+    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
+        raise ValueError("tool_pose contains non-finite values")
+    position = np.broadcast_to(position, (batch_size, 3)).copy()
+    rotation = np.broadcast_to(rotation, (batch_size, 3, 3)).copy()
+    return position, rotation
+
+
+def interpolate_poses(
+    start_position: np.ndarray,
+    start_rotation: np.ndarray,
+    end_position: np.ndarray,
+    end_rotation: np.ndarray,
+    fractions: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses at ``fractions`` (S,) in [0, 1] of the constant-velocity motion from start to end.
+
+    Positions (B, 3) in metres, rotations (B, 3, 3) world-from-tool. Returns (S, B, 3) positions
+    and (S, B, 3, 3) rotations: ``R(f) = R0 exp(f log(R0^T R1))``.
+    """
+    fractions = np.asarray(fractions, dtype=float)
+    relative = np.swapaxes(start_rotation, -1, -2) @ end_rotation
+    rotvec = Rotation.from_matrix(relative).as_rotvec()  # (B, 3), tool frame
+    steps = Rotation.from_rotvec((fractions[:, None, None] * rotvec[None]).reshape(-1, 3)).as_matrix()
+    steps = steps.reshape(len(fractions), -1, 3, 3)
+    rotations = start_rotation[None] @ steps
+    positions = start_position[None] + fractions[:, None, None] * (end_position - start_position)[None]
+    return positions, rotations
