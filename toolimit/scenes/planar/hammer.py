@@ -1,0 +1,253 @@
+"""Planar hammer scene (pymunk, vertical x-z plane): drive a nail into a board.
+
+World (pymunk x = world x, pymunk y = world z; world y is ignored):
+
+* the nail: a dynamic body (``nail_mass``, no rotation) made of a head plate (``nail_head_width``
+  wide, ``nail_head_thickness`` thick) and a shank; its head top starts at parameter
+  ``nail_position`` (x and z used; the board may be at any height) and protrudes ``protrusion``
+  (default 50 mm) above the board surface;
+* a vertical guide (pymunk GrooveJoint) that lets the nail move only straight down, by 0 to
+  ``protrusion`` (the head plate then lies on the board);
+* entry friction: a Coulomb-like force of at most ``friction_force`` (default 20 N) opposing the
+  nail's motion (a pymunk PivotJoint with ``max_bias = 0`` and ``max_force = friction_force``: it
+  cancels the nail's velocity with a bounded force, exactly dry friction). With the default 50 g
+  nail it stops a nail moving at v after v^2 / (2 (F/m - g)) = 11 mm at 3 m/s, 0.1 mm at 0.3 m/s;
+* the board: a block under the nail from the ground up to the board surface; geometry for views
+  and footprints only, not a pymunk shape (the nail enters it along the guide, and pymunk would
+  let the kinematic hammer pass through a static shape anyway).
+
+The hammer (tool frame: origin at the head centre, z along the handle, x the striking direction)
+is the projection into the plane of its head box (``ToolSpec.head_width`` 0.11 m along x,
+``ToolSpec.head_length`` 0.035 m along z, ``head_depth`` along y) and of its handle (a segment of
+``handle_radius`` to ``ToolSpec.length``). The tool is kinematic: a moving hammer pushes the nail
+with whatever force it takes, so the nail travels as far as the hammer follows it, plus the slide
+it keeps after the hammer stops (the momentum it received, braked by the friction above).
+
+Rewards: goal reward 1 when less than ``planted_tolerance`` (1 mm) of the nail's travel is left.
+Dense reward (the paper's appendix shaping for the hammer, "negative distance of the hammer head
+to the nail plus nail depth"): ``-|head centre - nail head top| + travel / protrusion`` (m, and a
+fraction in [0, 1]). Success: planted at some control step whose end time, measured from the
+start of the first ``step`` after ``reset``, is at most ``success_window`` seconds (1 s, DESIGN.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.planar.kinematic_tool import KinematicTool
+from toolimit.tools import ToolPose, tool_spec
+
+#: Nail positions beyond this |x| (m) or above this height (m) are rejected.
+WORLD_HALF_EXTENT = 5.0
+MAX_NAIL_HEIGHT = 3.0
+#: Half-length (m) of the board block along x.
+BOARD_HALF_LENGTH = 0.15
+#: Shank length (m) below the board surface at the start (hidden in the board).
+SHANK_EMBEDDED = 0.02
+
+
+class PlanarHammerScene:
+    """B instances of the planar hammer world; see the module docstring for geometry and rewards.
+
+    Args:
+        control_dt: duration of one ``step``, s.
+        substeps: physics sub-steps per control step (20 at 24 Hz = 480 Hz).
+        protrusion: nail travel from its start to fully planted, m (0 < protrusion <= 0.1).
+        nail_mass: kg. friction_force: maximum entry friction force, N.
+        nail_head_width, nail_head_thickness, nail_shank_width: nail dimensions, m.
+        head_depth: hammer head extent along the tool's y axis, m. handle_radius: m.
+        planted_tolerance: travel left (m) below which the nail counts as planted.
+        success_window: time (s) from the first step within which the nail must be planted.
+    """
+
+    tool = "hammer"
+    world = "planar"
+
+    def __init__(
+        self,
+        control_dt: float = 1.0 / CONTROL_FPS,
+        substeps: int = 20,
+        protrusion: float = 0.05,
+        nail_mass: float = 0.05,
+        friction_force: float = 20.0,
+        nail_head_width: float = 0.03,
+        nail_head_thickness: float = 0.006,
+        nail_shank_width: float = 0.005,
+        head_depth: float = 0.03,
+        handle_radius: float = 0.012,
+        planted_tolerance: float = 0.001,
+        success_window: float = 1.0,
+    ):
+        if control_dt <= 0 or substeps < 1:
+            raise ValueError(f"need control_dt > 0 and substeps >= 1; got {control_dt}, {substeps}")
+        if not 0.0 < protrusion <= 0.1:
+            raise ValueError(f"protrusion must be in (0, 0.1] m, got {protrusion}")
+        self.control_dt = float(control_dt)
+        self.substeps = int(substeps)
+        self.protrusion = float(protrusion)
+        self.nail_mass = float(nail_mass)
+        self.friction_force = float(friction_force)
+        self.nail_head_width = float(nail_head_width)
+        self.nail_head_thickness = float(nail_head_thickness)
+        self.nail_shank_width = float(nail_shank_width)
+        self.handle_radius = float(handle_radius)
+        self.planted_tolerance = float(planted_tolerance)
+        self.success_window = float(success_window)
+        spec = tool_spec("hammer")
+        half = np.array([spec.head_width, head_depth, spec.head_length]) / 2.0
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+        self._head_corners = corners  # (8, 3) tool frame, m
+        self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
+        self.parameters = (
+            ParameterSpec(
+                "nail_position", "position", (-WORLD_HALF_EXTENT, -WORLD_HALF_EXTENT, self.protrusion),
+                (WORLD_HALF_EXTENT, WORLD_HALF_EXTENT, MAX_NAIL_HEIGHT), on_ground=False, unit="m",
+                description=f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
+            ),
+        )
+        self.batch_size = 0
+
+    def _require_reset(self) -> None:
+        if self.batch_size == 0:
+            raise RuntimeError(f"{type(self).__name__}: call reset() first")
+
+    # ----------------------------------------------------------------------------------- parameters
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make a scene: missing/malformed, out of bounds, board below ground."""
+        if "nail_position" not in params:
+            return "missing parameter 'nail_position'"
+        nail = np.asarray(params["nail_position"], dtype=float)
+        if nail.shape != (3,) or not np.all(np.isfinite(nail)):
+            return f"parameter 'nail_position' must be a finite (3,) world point, got {nail!r}"
+        if abs(nail[0]) > WORLD_HALF_EXTENT:
+            return f"nail_position x = {nail[0]:.3f} m is outside the world |x| <= {WORLD_HALF_EXTENT} m"
+        if nail[2] < self.protrusion:
+            return (
+                f"nail_position z = {nail[2]:.3f} m puts the board surface {nail[2] - self.protrusion:.3f} m "
+                "below the ground (z = 0)"
+            )
+        if nail[2] > MAX_NAIL_HEIGHT:
+            return f"nail_position z = {nail[2]:.3f} m is above the world's {MAX_NAIL_HEIGHT} m ceiling"
+        return None
+
+    # ----------------------------------------------------------------------------------- reset/step
+    def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
+        """Build ``batch_size`` identical instances (this scene has no per-instance randomness)."""
+        reason = self.invalid_reason(params)
+        if reason is not None:
+            raise InvalidSceneParameters(reason)
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        nail = np.asarray(params["nail_position"], dtype=float)
+        self.nail_start = np.array([nail[0], nail[2]])  # plane point of the head top, m
+        self._spaces, self._nails = [], []
+        for _ in range(batch_size):
+            space = pymunk.Space()
+            space.gravity = (0.0, -9.81)
+            space.collision_slop = 0.0002
+            self._nails.append(self._add_nail(space))
+            self._spaces.append(space)
+        self.batch_size = batch_size
+        self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
+        self._tool_shapes = []
+        for body in self._tool.bodies:
+            head = pymunk.Poly(body, [(-0.01, -0.01), (0.01, -0.01), (0.0, 0.01)])
+            handle = pymunk.Segment(body, (0, 0), (0, 0), self.handle_radius)
+            for shape in (head, handle):
+                shape.friction = 0.5
+            self._tool_shapes.append((head, handle))
+        self._time = 0.0
+        self._planted_at = np.full(batch_size, np.inf)
+
+    def _add_nail(self, space: pymunk.Space) -> pymunk.Body:
+        """The nail body with its guide and friction joints; body origin = head top, plane m."""
+        body = pymunk.Body(self.nail_mass, float("inf"))
+        body.position = tuple(self.nail_start)
+        w, t = self.nail_head_width / 2.0, self.nail_head_thickness
+        shank_bottom = -(t + self.protrusion + SHANK_EMBEDDED)
+        s = self.nail_shank_width / 2.0
+        head = pymunk.Poly(body, [(-w, -t), (w, -t), (w, 0.0), (-w, 0.0)])
+        shank = pymunk.Poly(body, [(-s, shank_bottom), (s, shank_bottom), (s, -t), (-s, -t)])
+        for shape in (head, shank):
+            shape.friction = 0.5
+            shape.elasticity = 0.0
+        x, y = self.nail_start
+        guide = pymunk.GrooveJoint(space.static_body, body, (x, y), (x, y - self.protrusion), (0.0, 0.0))
+        friction = pymunk.PivotJoint(space.static_body, body, (x, y), (0.0, 0.0))
+        friction.max_bias = 0.0
+        friction.max_force = self.friction_force
+        space.add(body, head, shank, guide, friction)
+        return body
+
+    def step(self, tool_pose: ToolPose) -> None:
+        """Move the hammer to ``tool_pose`` over ``control_dt`` (velocity-driven) and simulate."""
+        self._require_reset()
+        first = not self._tool.placed
+        self._tool.begin_step(tool_pose, self.control_dt)
+        head_local = self._tool.local_points(self._head_corners)
+        handle_local = self._tool.local_points(self._handle_points)
+        identity = pymunk.Transform.identity()
+        for b, (head, handle) in enumerate(self._tool_shapes):
+            head.unsafe_set_vertices([tuple(map(float, p)) for p in head_local[b]], identity)
+            handle.unsafe_set_endpoints(tuple(map(float, handle_local[b, 0])), tuple(map(float, handle_local[b, 1])))
+            if first:  # the hammer enters the world only now, at its first pose
+                self._spaces[b].add(head, handle)
+        dt = self.control_dt / self.substeps
+        for space in self._spaces:
+            for _ in range(self.substeps):
+                space.step(dt)
+        self._tool.end_step()
+        self._time += self.control_dt
+        planted = self.goal_reward() > 0
+        self._planted_at = np.where(planted & ~np.isfinite(self._planted_at), self._time, self._planted_at)
+
+    # ----------------------------------------------------------------------------------- rewards
+    def travel(self) -> np.ndarray:
+        """(B,) how far each nail has been driven down from its start, m, in [0, protrusion]."""
+        self._require_reset()
+        y = np.array([nail.position.y for nail in self._nails])
+        return np.clip(self.nail_start[1] - y, 0.0, self.protrusion)
+
+    def goal_reward(self) -> np.ndarray:
+        """(B,) 1 where less than ``planted_tolerance`` of the travel is left, else 0."""
+        self._require_reset()
+        return (self.protrusion - self.travel() < self.planted_tolerance).astype(float)
+
+    def dense_reward(self) -> np.ndarray:
+        """(B,) -(hammer head to nail head top distance, m) + travel / protrusion."""
+        self._require_reset()
+        depth = self.travel() / self.protrusion
+        if not self._tool.placed:
+            return depth
+        nail_top = np.stack([np.full(self.batch_size, self.nail_start[0]), self.nail_start[1] - self.travel()], -1)
+        return -np.linalg.norm(self._tool.position - nail_top, axis=-1) + depth
+
+    def is_success(self) -> np.ndarray:
+        """(B,) the nail was planted within ``success_window`` s of the first step's start."""
+        self._require_reset()
+        return self._planted_at <= self.success_window + 1e-9
+
+    # ----------------------------------------------------------------------------------- views
+    def footprints(self) -> np.ndarray:
+        """(1, 5) the board under the nail (x, y, half-length, half-width, yaw), m/rad; the planar
+        world spans the y axis, so the half-width is large (10 m)."""
+        self._require_reset()
+        return np.array([[self.nail_start[0], 0.0, BOARD_HALF_LENGTH, 10.0, 0.0]])
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Instance 0: ``nail_top`` (3,) world head-top point, ``travel`` (), ``board`` (2, 3) the
+        board block's min and max corners (y = 0), ``hammer_head`` (8, 3) world corners (if placed)."""
+        self._require_reset()
+        travel = self.travel()[0]
+        x, z = self.nail_start
+        board_top = z - self.protrusion
+        snapshot = {
+            "nail_top": np.array([x, 0.0, z - travel]),
+            "travel": np.array(travel),
+            "board": np.array([[x - BOARD_HALF_LENGTH, 0.0, 0.0], [x + BOARD_HALF_LENGTH, 0.0, board_top]]),
+        }
+        if self._tool.placed:
+            snapshot["hammer_head"] = self._tool.world_points(self._head_corners)[0]
+        return snapshot

@@ -1,0 +1,217 @@
+"""Planar scythe scene (horizontal x-y plane): cut a patch of grass stalks with a fast low sweep.
+
+World (pymunk x, y = world x, y; heights z are checked separately): ``stalk_count`` grass stalks,
+points standing on the ground, placed uniformly at random (each instance with its own generator
+draws) in a disc of diameter ``patch_diameter`` centred at parameter ``grass_position``.
+
+The scythe (tool frame: origin at the blade root, x along the cutting edge, z towards the handle)
+cuts with its blade, the segment from the head along tool x of length ``ToolSpec.head_width``
+(0.45 m), projected into the plane. The blade is a kinematic pymunk body (see kinematic_tool); over
+each control step it moves at constant velocity and angular velocity and the cut test runs on
+``substeps`` sub-intervals of that motion. A stalk is cut in a sub-interval when
+
+* the blade sweeps across it: in the blade's own frame the stalk's signed distance to the blade
+  line changes sign (or is within ``stalk_radius``) and the crossing lies between the blade's root
+  and tip (a swept-segment test, so nothing tunnels at 4 m/s);
+* the blade's height at the crossing point (interpolated in 3D) is between the ground and
+  ``max_cut_height`` (0.1 m);
+* the blade's speed across the stalk, perpendicular to the cutting edge in the plane, is at least
+  ``min_cut_speed`` (1 m/s), in either direction.
+
+Rewards: goal reward = number of stalks cut. Dense reward (the paper's appendix shaping for the
+scythe, "tool-to-grass distance plus cut count"): ``cut count - (plane distance from the blade to
+the nearest uncut stalk, m)``. Success: every stalk cut by the end of a control step ending at most
+``success_window`` seconds (1 s, DESIGN.md) after the start of the first ``step`` after ``reset``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.planar.kinematic_tool import KinematicTool
+from toolimit.tools import ToolPose, tool_spec
+
+#: Patch centres beyond this |x| or |y| (m) are rejected.
+WORLD_HALF_EXTENT = 5.0
+
+
+class PlanarScytheScene:
+    """B instances of the planar scythe world; see the module docstring for the cut test.
+
+    Args:
+        control_dt: duration of one ``step``, s.
+        substeps: cut-test sub-intervals per control step (10 at 24 Hz = 240 Hz).
+        stalk_count: stalks in the patch. patch_diameter: m. stalk_radius: m.
+        max_cut_height: highest blade height (m) that cuts. min_cut_speed: slowest cut, m/s.
+        success_window: time (s) from the first step within which every stalk must be cut.
+    """
+
+    tool = "scythe"
+    world = "planar"
+
+    def __init__(
+        self,
+        control_dt: float = 1.0 / CONTROL_FPS,
+        substeps: int = 10,
+        stalk_count: int = 30,
+        patch_diameter: float = 0.4,
+        stalk_radius: float = 0.003,
+        max_cut_height: float = 0.1,
+        min_cut_speed: float = 1.0,
+        success_window: float = 1.0,
+    ):
+        if control_dt <= 0 or substeps < 1 or stalk_count < 1 or patch_diameter <= 0:
+            raise ValueError(
+                "need control_dt > 0, substeps >= 1, stalk_count >= 1, patch_diameter > 0; got "
+                f"{control_dt}, {substeps}, {stalk_count}, {patch_diameter}"
+            )
+        self.control_dt = float(control_dt)
+        self.substeps = int(substeps)
+        self.stalk_count = int(stalk_count)
+        self.patch_diameter = float(patch_diameter)
+        self.stalk_radius = float(stalk_radius)
+        self.max_cut_height = float(max_cut_height)
+        self.min_cut_speed = float(min_cut_speed)
+        self.success_window = float(success_window)
+        self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
+        self.parameters = (
+            ParameterSpec(
+                "grass_position", "position", (-WORLD_HALF_EXTENT, -WORLD_HALF_EXTENT, 0.0),
+                (WORLD_HALF_EXTENT, WORLD_HALF_EXTENT, 0.0), on_ground=True, unit="m",
+                description=f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
+            ),
+        )
+        self.batch_size = 0
+
+    def _require_reset(self) -> None:
+        if self.batch_size == 0:
+            raise RuntimeError(f"{type(self).__name__}: call reset() first")
+
+    # ----------------------------------------------------------------------------------- parameters
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make a scene: missing/malformed or |x|, |y| > 5 m."""
+        if "grass_position" not in params:
+            return "missing parameter 'grass_position'"
+        grass = np.asarray(params["grass_position"], dtype=float)
+        if grass.shape != (3,) or not np.all(np.isfinite(grass)):
+            return f"parameter 'grass_position' must be a finite (3,) world point, got {grass!r}"
+        if np.any(np.abs(grass[:2]) > WORLD_HALF_EXTENT):
+            return f"grass_position {grass[:2]} m is outside the world |x|, |y| <= {WORLD_HALF_EXTENT} m"
+        return None
+
+    # ----------------------------------------------------------------------------------- reset/step
+    def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
+        """Build ``batch_size`` instances, each with its own stalk placement drawn from ``rng``."""
+        reason = self.invalid_reason(params)
+        if reason is not None:
+            raise InvalidSceneParameters(reason)
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        self.grass_centre = np.asarray(params["grass_position"], dtype=float)[:2].copy()
+        # Instance by instance, so instance b's stalks do not depend on the batch size.
+        uniform = np.array([rng.uniform(0.0, 1.0, (2, self.stalk_count)) for _ in range(batch_size)])  # (B, 2, M)
+        radius = self.patch_diameter / 2.0 * np.sqrt(uniform[:, 0])  # uniform density over the disc
+        angle = 2.0 * np.pi * uniform[:, 1]
+        self.stalks = self.grass_centre + np.stack([radius * np.cos(angle), radius * np.sin(angle)], -1)  # (B, M, 2)
+        self.cut = np.zeros((batch_size, self.stalk_count), dtype=bool)
+        self._spaces = [pymunk.Space() for _ in range(batch_size)]
+        self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
+        self.batch_size = batch_size
+        self._time = 0.0
+        self._all_cut_at = np.full(batch_size, np.inf)
+
+    def step(self, tool_pose: ToolPose) -> None:
+        """Move the blade to ``tool_pose`` over ``control_dt`` and cut what it sweeps."""
+        self._require_reset()
+        first = not self._tool.placed
+        previous = self._tool.pose
+        start_position, start_angle = self._tool.position.copy(), self._tool.angle.copy()
+        self._tool.begin_step(tool_pose, self.control_dt)
+        if not first:
+            self._cut_swept_stalks(previous, start_position, start_angle)
+        for space in self._spaces:  # kinematic bodies integrate exactly over one step
+            space.step(self.control_dt)
+        self._tool.end_step()
+        self._time += self.control_dt
+        done = self.cut.all(axis=1)
+        self._all_cut_at = np.where(done & ~np.isfinite(self._all_cut_at), self._time, self._all_cut_at)
+
+    def _cut_swept_stalks(
+        self, previous: tuple[np.ndarray, np.ndarray], start_position: np.ndarray, start_angle: np.ndarray
+    ) -> None:
+        """Mark stalks swept by the blade over this step (see the module docstring)."""
+        fractions = np.linspace(0.0, 1.0, self.substeps + 1)[:, None]  # (S+1, 1)
+        velocity = np.array([tuple(body.velocity) for body in self._tool.bodies])  # (B, 2) m/s
+        angular_velocity = np.array([body.angular_velocity for body in self._tool.bodies])  # (B,) rad/s
+        t = fractions * self.control_dt
+        root = start_position[None] + t[..., None] * velocity[None]  # (S+1, B, 2)
+        angle = start_angle[None] + t * angular_velocity[None]  # (S+1, B)
+        blade_length = self._tool.local_points(self._blade_points)[:, 1, 0]  # (B,) in-plane length, m
+        edge = np.stack([np.cos(angle), np.sin(angle)], -1)  # (S+1, B, 2)
+        normal = np.stack([-edge[..., 1], edge[..., 0]], -1)
+        offset = self.stalks[None] - root[:, :, None, :]  # (S+1, B, M, 2)
+        along = np.einsum("sbmk,sbk->sbm", offset, edge)
+        across = np.einsum("sbmk,sbk->sbm", offset, normal)
+        a0, a1, s0, s1 = across[:-1], across[1:], along[:-1], along[1:]
+        crossed = (a0 * a1 <= 0.0) | (np.minimum(np.abs(a0), np.abs(a1)) <= self.stalk_radius)
+        weight = np.clip(np.abs(a0) / np.maximum(np.abs(a0) + np.abs(a1), 1e-12), 0.0, 1.0)  # crossing time
+        s_cross = s0 + weight * (s1 - s0)
+        on_blade = (s_cross >= 0.0) & (s_cross <= blade_length[None, :, None])
+        speed = np.abs(a1 - a0) / (self.control_dt / self.substeps)
+        # Blade height at the crossing: 3D root and tip heights interpolated in time and along the blade.
+        (p0, r0), (p1, r1) = previous, self._tool.pose
+        tip0 = p0[:, 2] + r0[:, 2, 0] * self._blade_points[1, 0]
+        tip1 = p1[:, 2] + r1[:, 2, 0] * self._blade_points[1, 0]
+        time = (fractions[:-1, :, None] + weight / self.substeps)  # (S, B, M) fraction of the step
+        root_z = p0[:, 2][None, :, None] + time * (p1 - p0)[:, 2][None, :, None]
+        tip_z = tip0[None, :, None] + time * (tip1 - tip0)[None, :, None]
+        along_fraction = np.clip(s_cross / np.maximum(blade_length[None, :, None], 1e-9), 0.0, 1.0)
+        height = root_z + along_fraction * (tip_z - root_z)
+        low = (height >= 0.0) & (height <= self.max_cut_height)
+        cuts = crossed & on_blade & low & (speed >= self.min_cut_speed)
+        self.cut |= cuts.any(axis=0)
+
+    # ----------------------------------------------------------------------------------- rewards
+    def goal_reward(self) -> np.ndarray:
+        """(B,) number of stalks cut."""
+        self._require_reset()
+        return self.cut.sum(axis=1).astype(float)
+
+    def dense_reward(self) -> np.ndarray:
+        """(B,) stalks cut - plane distance (m) from the blade segment to the nearest uncut stalk."""
+        self._require_reset()
+        cut_count = self.goal_reward()
+        if not self._tool.placed:
+            return cut_count
+        blade_length = self._tool.local_points(self._blade_points)[:, 1, 0]  # (B,) in-plane, m
+        edge = np.stack([np.cos(self._tool.angle), np.sin(self._tool.angle)], -1)
+        offset = self.stalks - self._tool.position[:, None, :]
+        along = np.clip(np.einsum("bmk,bk->bm", offset, edge), 0.0, blade_length[:, None])
+        distance = np.linalg.norm(offset - along[..., None] * edge[:, None, :], axis=-1)
+        nearest = np.where(self.cut, np.inf, distance).min(axis=1)
+        return cut_count - np.where(np.isfinite(nearest), nearest, 0.0)
+
+    def is_success(self) -> np.ndarray:
+        """(B,) every stalk was cut within ``success_window`` s of the first step's start."""
+        self._require_reset()
+        return self._all_cut_at <= self.success_window + 1e-9
+
+    # ----------------------------------------------------------------------------------- views
+    def footprints(self) -> np.ndarray:
+        """(1, 5) the grass patch's bounding square (x, y, half-length, half-width, yaw), m/rad."""
+        self._require_reset()
+        half = self.patch_diameter / 2.0
+        return np.array([[self.grass_centre[0], self.grass_centre[1], half, half, 0.0]])
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Instance 0: ``stalks`` (M, 3) world foot points, ``cut`` (M,) bool, ``blade`` (2, 3) world
+        root and tip (if placed)."""
+        self._require_reset()
+        stalks = np.zeros((self.stalk_count, 3))
+        stalks[:, :2] = self.stalks[0]
+        snapshot = {"stalks": stalks, "cut": self.cut[0].copy()}
+        if self._tool.placed:
+            snapshot["blade"] = self._tool.world_points(self._blade_points)[0]
+        return snapshot

@@ -1,0 +1,331 @@
+"""Planar spade scene (pymunk, vertical x-z plane): scoop sand from a deposit into a goal box.
+
+World (pymunk x = world x, pymunk y = world z; world y is ignored):
+
+* static ground, top surface at z = 0;
+* the sand deposit: an open-top tray (two walls, inner width ``2 * deposit_half_width``, walls
+  ``deposit_wall_height`` tall) centred at parameter ``sand_position`` x, holding ``sand_count``
+  sand circles (radius ``sand.radius``, Coulomb friction) settled into a pile (once per geometry,
+  see sand_pile); each instance shifts every circle by its own seeded jitter (standard deviation
+  ``sand_jitter``, upward only in z). With ``sleeping`` the pile starts asleep: it costs nothing
+  until the tool touches it, and woken circles resolve their millimetre overlaps then;
+* the goal box: two walls ``goal_wall_height`` tall, inner width ``2 * goal_half_width``, centred
+  at parameter ``goal_position`` x. It is a dynamic body (``goal_box_mass``, sliding on the ground
+  with friction, no rotation), so the tool cannot carry or push sand through its walls: a spade that
+  runs into it shoves the box. The deposit's walls are static (sand pushed out of the deposit earns
+  nothing, and the deposit stays where alignment put it).
+
+The spade (tool frame of toolimit.tools: origin at the blade tip, z along the blade towards the
+handle, x the blade's face normal on the side that carries sand) is the projection into the plane
+of three segments, ``blade_radius`` thick so that nothing tunnels: the blade from the tip along z
+(``ToolSpec.head_length``), a heel lip of ``lip_height`` along x at the blade's end (a dustpan: sand
+slides back against it while carried) and the handle up to ``ToolSpec.length``. A blade whose x
+axis points out of the plane loses its lip and carries only what friction holds on a flat stick.
+The spade is kinematic: it moves through the static deposit walls and ground (pymunk does not
+collide kinematic with static bodies) and pushes sand and the goal box with whatever force it
+takes.
+
+Rewards: goal reward = number of circles inside the goal box (between its walls where the box is
+now, below their top).
+Dense reward (the paper's appendix shaping for the spade, "negative distance of the sand to the
+goal box and of the tool to the sand"): ``-(mean distance of the circles to the box centre) -
+(distance of the blade tip to the nearest circle not yet in the box)``, metres.
+Success (DESIGN.md): at least ``success_count`` (10) circles in the box for at least half of the
+control steps since the reset.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+import pymunk.batch
+
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.planar.kinematic_tool import KinematicTool
+from toolimit.scenes.planar.sand_pile import (
+    SandMaterial,
+    add_circles,
+    add_ground,
+    add_open_box,
+    add_tray,
+    configure_space,
+    settled_pile,
+)
+from toolimit.tools import ToolPose, tool_spec
+
+#: Element positions beyond this |x| (m) are rejected: the planar world is a 10 m strip.
+WORLD_HALF_EXTENT = 5.0
+#: Thickness of tray and box walls, m.
+WALL_THICKNESS = 0.02
+#: Minimum free gap between the deposit's and the goal box's outer walls, m.
+ELEMENT_CLEARANCE = 0.02
+
+
+def spade_outline(head_length: float, length: float, lip_height: float) -> np.ndarray:
+    """(4, 3) tool-frame points (m) of the spade's segments: tip, heel, lip top, handle end.
+
+    Segments: blade = tip-heel, lip = heel-lip top (along tool x), handle = heel-handle end.
+    """
+    return np.array([[0.0, 0.0, 0.0], [0.0, 0.0, head_length], [lip_height, 0.0, head_length], [0.0, 0.0, length]])
+
+
+class PlanarSpadeScene:
+    """B instances of the planar spade world; see the module docstring for geometry and rewards.
+
+    Args:
+        control_dt: duration of one ``step``, s.
+        substeps: physics sub-steps per control step (10 at 24 Hz = 240 Hz).
+        sand_count: number of sand circles.
+        sand: radius (m), mass (kg), friction, elasticity of the circles.
+        sand_jitter: standard deviation (m) of each instance's per-circle shift of the settled pile.
+        deposit_half_width, deposit_wall_height: tray inner half-width and wall height, m.
+        goal_half_width, goal_wall_height: goal box inner half-width and wall height, m.
+        goal_box_mass: mass of the goal box, kg.
+        blade_radius: half-thickness of the spade's segments, m.
+        lip_height: heel lip length along the tool's x axis, m.
+        success_count: circles in the box that count as a successful step.
+        solver_iterations: pymunk solver iterations.
+        sleeping: let circles at rest sleep (pymunk's sleeping): the pile starts asleep and costs no
+            time until the tool touches it; False keeps every circle simulated (for checks).
+    """
+
+    tool = "spade"
+    world = "planar"
+
+    def __init__(
+        self,
+        control_dt: float = 1.0 / CONTROL_FPS,
+        substeps: int = 10,
+        sand_count: int = 40,
+        sand: SandMaterial = SandMaterial(),
+        sand_jitter: float = 0.001,
+        deposit_half_width: float = 0.18,
+        deposit_wall_height: float = 0.04,
+        goal_half_width: float = 0.175,
+        goal_wall_height: float = 0.10,
+        goal_box_mass: float = 2.0,
+        blade_radius: float = 0.008,
+        lip_height: float = 0.05,
+        success_count: int = 10,
+        solver_iterations: int = 10,
+        sleeping: bool = True,
+    ):
+        if control_dt <= 0 or substeps < 1 or sand_count < 1:
+            raise ValueError(
+                f"need control_dt > 0, substeps >= 1, sand_count >= 1; got {control_dt}, {substeps}, {sand_count}"
+            )
+        self.control_dt = float(control_dt)
+        self.substeps = int(substeps)
+        self.sand_count = int(sand_count)
+        self.sand = sand
+        self.sand_jitter = float(sand_jitter)
+        self.deposit_half_width = float(deposit_half_width)
+        self.deposit_wall_height = float(deposit_wall_height)
+        self.goal_half_width = float(goal_half_width)
+        self.goal_wall_height = float(goal_wall_height)
+        self.goal_box_mass = float(goal_box_mass)
+        self.blade_radius = float(blade_radius)
+        self.success_count = int(success_count)
+        self.solver_iterations = int(solver_iterations)
+        self.sleeping = bool(sleeping)
+        spec = tool_spec("spade")
+        self._outline = spade_outline(spec.head_length, spec.length, lip_height)
+        low, high = (-WORLD_HALF_EXTENT, -WORLD_HALF_EXTENT, 0.0), (WORLD_HALF_EXTENT, WORLD_HALF_EXTENT, 0.0)
+        self.parameters = (
+            ParameterSpec("sand_position", "position", low, high, on_ground=True, unit="m",
+                          description="centre of the sand deposit tray on the ground (x used)"),
+            ParameterSpec("goal_position", "position", low, high, on_ground=True, unit="m",
+                          description="centre of the open goal box on the ground (x used)"),
+        )
+        self.batch_size = 0
+        self._spaces: list[pymunk.Space] = []
+
+    def _require_reset(self) -> None:
+        if self.batch_size == 0:
+            raise RuntimeError(f"{type(self).__name__}: call reset() first")
+
+    # ----------------------------------------------------------------------------------- parameters
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make a scene: missing/malformed, |x| > 5 m, deposit and box overlap."""
+        xs = {}
+        for spec in self.parameters:
+            if spec.name not in params:
+                return f"missing parameter {spec.name!r}"
+            value = np.asarray(params[spec.name], dtype=float)
+            if value.shape != (3,) or not np.all(np.isfinite(value)):
+                return f"parameter {spec.name!r} must be a finite (3,) world point, got {value!r}"
+            if abs(value[0]) > WORLD_HALF_EXTENT:
+                return f"{spec.name} x = {value[0]:.3f} m is outside the world |x| <= {WORLD_HALF_EXTENT} m"
+            xs[spec.name] = value[0]
+        gap = abs(xs["sand_position"] - xs["goal_position"]) - (
+            self.deposit_half_width + self.goal_half_width + 2 * WALL_THICKNESS
+        )
+        if gap < ELEMENT_CLEARANCE:
+            return (
+                f"sand deposit (x = {xs['sand_position']:.3f} m) and goal box (x = {xs['goal_position']:.3f} m) "
+                f"overlap: the gap between their walls is {gap:.3f} m < {ELEMENT_CLEARANCE} m"
+            )
+        return None
+
+    # ----------------------------------------------------------------------------------- reset/step
+    def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
+        """Build ``batch_size`` instances; each jitters the settled pile with ``rng``."""
+        reason = self.invalid_reason(params)
+        if reason is not None:
+            raise InvalidSceneParameters(reason)
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        self.sand_x = float(np.asarray(params["sand_position"], dtype=float)[0])
+        self.goal_x = float(np.asarray(params["goal_position"], dtype=float)[0])
+        dt = self.control_dt / self.substeps
+        pile = settled_pile(
+            self.sand_count, self.deposit_half_width, self.deposit_wall_height, WALL_THICKNESS, self.sand, dt,
+            self.solver_iterations,
+        )
+        self._spaces, self._sand_bodies, self._boxes = [], [], []
+        for _ in range(batch_size):
+            space = pymunk.Space()
+            configure_space(space, self.solver_iterations, self.sleeping)
+            add_ground(space, self.sand.friction)
+            add_tray(space, self.sand_x, self.deposit_half_width, self.deposit_wall_height, WALL_THICKNESS,
+                     self.sand.friction)
+            box = add_open_box(
+                space, self.goal_x, self.goal_half_width, self.goal_wall_height, WALL_THICKNESS, self.sand.friction,
+                self.goal_box_mass,
+            )
+            jitter = rng.normal(0.0, self.sand_jitter, pile.shape)
+            jitter[:, 1] = np.abs(jitter[:, 1])  # lift rather than push circles into the ground
+            positions = pile + jitter + np.array([self.sand_x, 0.0])
+            bodies = add_circles(space, positions, self.sand)
+            if self.sleeping:
+                for body in [box, *bodies]:  # at rest until touched: the tool (or a woken body) wakes it
+                    body.sleep()
+            self._sand_bodies.append(bodies)
+            self._boxes.append(box)
+            self._spaces.append(space)
+        self.batch_size = batch_size
+        self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
+        self._segments: list[list[pymunk.Segment]] = []
+        self._segment_points = np.zeros((batch_size, 4, 2))
+        for space, body in zip(self._spaces, self._tool.bodies):
+            segments = [pymunk.Segment(body, (0, 0), (0, 0), self.blade_radius) for _ in range(3)]
+            for segment in segments:
+                segment.friction = self.sand.friction
+            self._segments.append(segments)
+        self._buffer = pymunk.batch.Buffer()
+        self._body_ids = [
+            np.array([body.id for body in [*bodies, box]], dtype=np.uintp)
+            for bodies, box in zip(self._sand_bodies, self._boxes)
+        ]
+        self._sand, self._box_x = self._read_bodies()
+        self._steps = 0
+        self._successful_steps = np.zeros(batch_size, dtype=int)
+
+    def step(self, tool_pose: ToolPose) -> None:
+        """Move the spade to ``tool_pose`` over ``control_dt`` (velocity-driven) and simulate."""
+        self._require_reset()
+        first = not self._tool.placed
+        self._tool.begin_step(tool_pose, self.control_dt)
+        self._update_outline(self._tool.local_points(self._outline))
+        if first:  # the tool enters the world only now, at its first pose
+            for space, segments in zip(self._spaces, self._segments):
+                space.add(*segments)
+        dt = self.control_dt / self.substeps
+        for space in self._spaces:
+            for _ in range(self.substeps):
+                space.step(dt)
+        self._tool.end_step()
+        self._sand, self._box_x = self._read_bodies()
+        self._steps += 1
+        self._successful_steps += self.goal_reward() >= self.success_count
+
+    def _update_outline(self, local: np.ndarray) -> None:
+        """Reshape the segments to the projected outline (B, 4, 2) where it changed by > 0.1 mm."""
+        changed = np.abs(local - self._segment_points).max(axis=(1, 2)) > 1e-4
+        for b in np.flatnonzero(changed):
+            tip, heel, lip, handle = (tuple(map(float, p)) for p in local[b])
+            blade, lip_segment, handle_segment = self._segments[b]
+            blade.unsafe_set_endpoints(tip, heel)
+            lip_segment.unsafe_set_endpoints(heel, lip)
+            handle_segment.unsafe_set_endpoints(heel, handle)
+        self._segment_points[changed] = local[changed]
+
+    def _read_bodies(self) -> tuple[np.ndarray, np.ndarray]:
+        """(B, N, 2) plane positions (world x, z) of the sand circles and (B,) goal box centre x, m.
+
+        Reads all bodies of a space in one call (pymunk.batch); sleeping bodies change the order,
+        so rows are matched to bodies by id.
+        """
+        state = np.empty((self.batch_size, self.sand_count + 1, 2))
+        fields = pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
+        for b, space in enumerate(self._spaces):
+            self._buffer.clear()
+            pymunk.batch.get_space_bodies(space, fields, self._buffer)
+            ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)
+            positions = np.frombuffer(self._buffer.float_buf(), dtype=float).reshape(-1, 2)
+            order = np.argsort(ids)
+            rows = order[np.minimum(np.searchsorted(ids, self._body_ids[b], sorter=order), len(ids) - 1)]
+            if not np.array_equal(ids[rows], self._body_ids[b]):
+                raise RuntimeError("pymunk.batch did not report every sand circle and the goal box")
+            state[b] = positions[rows]
+        return state[:, :-1], state[:, -1, 0]
+
+    # ----------------------------------------------------------------------------------- rewards
+    def _in_goal_box(self) -> np.ndarray:
+        """(B, N) bool: circle centres between the goal box walls and below their top."""
+        x, z = self._sand[..., 0], self._sand[..., 1]
+        return (np.abs(x - self._box_x[:, None]) < self.goal_half_width) & (z < self.goal_wall_height)
+
+    def goal_reward(self) -> np.ndarray:
+        """(B,) number of sand circles in the goal box."""
+        self._require_reset()
+        return self._in_goal_box().sum(axis=1).astype(float)
+
+    def dense_reward(self) -> np.ndarray:
+        """(B,) -(mean circle distance to the box centre) - (tip distance to the nearest circle outside), m."""
+        self._require_reset()
+        box_centre = np.stack([self._box_x, np.full(self.batch_size, 0.5 * self.goal_wall_height)], -1)
+        sand_to_box = np.linalg.norm(self._sand - box_centre[:, None, :], axis=-1).mean(axis=1)
+        if not self._tool.placed:
+            return -sand_to_box
+        tip = self._tool.position[:, None, :]
+        tip_to_sand = np.linalg.norm(self._sand - tip, axis=-1)
+        tip_to_sand = np.where(self._in_goal_box(), np.inf, tip_to_sand).min(axis=1)
+        return -sand_to_box - np.where(np.isfinite(tip_to_sand), tip_to_sand, 0.0)
+
+    def is_success(self) -> np.ndarray:
+        """(B,) >= success_count circles in the box for at least half of the steps since reset."""
+        self._require_reset()
+        if self._steps == 0:
+            return np.zeros(self.batch_size, dtype=bool)
+        return 2 * self._successful_steps >= self._steps
+
+    # ----------------------------------------------------------------------------------- views
+    def footprints(self) -> np.ndarray:
+        """(2, 5) deposit and goal box rectangles (x, y, half-length, half-width, yaw), m/rad, where
+        they stand at reset. The planar world spans the y axis, so the half-width is large (10 m)."""
+        self._require_reset()
+        return np.array([
+            [self.sand_x, 0.0, self.deposit_half_width + WALL_THICKNESS, 10.0, 0.0],
+            [self.goal_x, 0.0, self.goal_half_width + WALL_THICKNESS, 10.0, 0.0],
+        ])
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Instance 0: ``sand`` (N, 3) world centres (y = 0), ``sand_radius`` (), ``walls`` (4, 2, 3)
+        wall bottom/top points, ``tool_segments`` (3, 2, 3) blade/lip/handle end points (if placed)."""
+        self._require_reset()
+        sand = np.zeros((self.sand_count, 3))
+        sand[:, [0, 2]] = self._sand[0]
+        walls = []
+        for centre, half, height in (
+            (self.sand_x, self.deposit_half_width, self.deposit_wall_height),
+            (self._box_x[0], self.goal_half_width, self.goal_wall_height),
+        ):
+            for side in (-1, 1):
+                x = centre + side * (half + WALL_THICKNESS / 2)
+                walls.append([[x, 0.0, 0.0], [x, 0.0, height]])
+        snapshot = {"sand": sand, "sand_radius": np.array(self.sand.radius), "walls": np.array(walls)}
+        if self._tool.placed:
+            tip, heel, lip, handle = self._tool.world_points(self._outline)[0]
+            snapshot["tool_segments"] = np.array([[tip, heel], [heel, lip], [heel, handle]])
+        return snapshot
