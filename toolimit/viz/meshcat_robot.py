@@ -52,10 +52,10 @@ from toolimit.viz.meshcat_views import (
     TOOL,
     WORLD,
     RobotVisual,
-    _geometry,
-    _load_geometry,
-    _material,
-    _robot_frame,
+    element_geometry,
+    load_geometry,
+    element_material,
+    set_robot_frame,
     replay_scene,
     save_html,
     static_visualizer,
@@ -244,13 +244,13 @@ def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, fr
         visualizer[GROUND].set_transform(placement(np.array([centre[0], centre[1], -0.005])))
     else:
         for element in world_elements(robot.tool.name, world_frames[0]):
-            visualizer[f"{WORLD}/{element.path}"].set_object(_geometry(element), _material(element.colour))
+            visualizer[f"{WORLD}/{element.path}"].set_object(element_geometry(element), element_material(element.colour))
             visualizer[f"{WORLD}/{element.path}"].set_transform(element.transform)
 
-    robot_viz = _load_geometry(visualizer, visual.model, visual.visual_model, ROBOT)
+    robot_viz = load_geometry(visualizer, visual.model, visual.visual_model, ROBOT)
     visualizer[ROBOT].set_transform(visual.base_placement)
-    _robot_frame(visualizer, robot_viz, q_frames[0])
-    tool_viz = _load_geometry(visualizer, pin.Model(), tool_shapes(robot.tool.name).geometry_model, TOOL)
+    set_robot_frame(visualizer, robot_viz, q_frames[0])
+    tool_viz = load_geometry(visualizer, pin.Model(), tool_shapes(robot.tool.name).geometry_model, TOOL)
     tool_viz.display(np.zeros(0))  # shapes at their tool-frame placements under the "tool" node
     visualizer[TOOL].set_transform(placement(positions[0], rotations[0]))
     visualizer[REACHED_TRIAD].set_object(mg.triad(triad_scale))
@@ -277,7 +277,7 @@ def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, fr
     for index, q in enumerate(q_frames):
         with animation.at_frame(visualizer, index) as frame:
             frame[TOOL].set_transform(placement(positions[index], rotations[index]))
-            _robot_frame(frame, robot_viz, q)
+            set_robot_frame(frame, robot_viz, q)
             if current is not None:
                 frame[CURRENT_TARGET].set_transform(current[index])
             if world_frames is not None and index > 0:

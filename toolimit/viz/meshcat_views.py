@@ -131,14 +131,14 @@ def save_html(visualizer: meshcat.Visualizer, path: str | os.PathLike[str]) -> P
 
 
 # ------------------------------------------------------------------------------ world elements
-def _geometry(element: Element) -> mg.Geometry:
+def element_geometry(element: Element) -> mg.Geometry:
     """meshcat geometry of a world element."""
     if element.shape == "sphere":
         return mg.Sphere(float(element.size[0]))
     return mg.Box(tuple(2.0 * element.size))
 
 
-def _material(colour: Sequence[float]) -> mg.MeshLambertMaterial:
+def element_material(colour: Sequence[float]) -> mg.MeshLambertMaterial:
     red, green, blue, alpha = (float(c) for c in colour)
     rgb = (int(red * 255) << 16) + (int(green * 255) << 8) + int(blue * 255)
     return mg.MeshLambertMaterial(color=rgb, opacity=alpha, transparent=alpha < 1.0)
@@ -160,7 +160,7 @@ class RobotVisual:
     base_placement: np.ndarray = field(default_factory=lambda: np.eye(4))
 
 
-def _load_geometry(
+def load_geometry(
     visualizer: meshcat.Visualizer, model: pin.Model, geometry: pin.GeometryModel, root: str
 ) -> MeshcatVisualizer:
     """Load a GeometryModel's shapes under ``root`` with Pinocchio's meshcat loader."""
@@ -216,9 +216,9 @@ def replay_visualizer(
     visualizer = static_visualizer(title=f"toolimit {tool} replay")
     first = world_elements(tool, frames[0])
     for element in first:
-        visualizer[f"{WORLD}/{element.path}"].set_object(_geometry(element), _material(element.colour))
+        visualizer[f"{WORLD}/{element.path}"].set_object(element_geometry(element), element_material(element.colour))
         visualizer[f"{WORLD}/{element.path}"].set_transform(element.transform)
-    tool_viz = _load_geometry(visualizer, pin.Model(), tool_shapes(tool).geometry_model, TOOL)
+    tool_viz = load_geometry(visualizer, pin.Model(), tool_shapes(tool).geometry_model, TOOL)
     tool_viz.display(np.zeros(0))  # shapes at their tool-frame placements under the "tool" node
 
     robot_viz = None
@@ -226,7 +226,7 @@ def replay_visualizer(
         robot_q = np.asarray(robot_q, dtype=float)
         if robot_q.shape != (len(frames), robot.model.nq):
             raise ValueError(f"robot_q must have shape ({len(frames)}, {robot.model.nq}), got {robot_q.shape}")
-        robot_viz = _load_geometry(visualizer, robot.model, robot.visual_model, ROBOT)
+        robot_viz = load_geometry(visualizer, robot.model, robot.visual_model, ROBOT)
         visualizer[ROBOT].set_transform(np.asarray(robot.base_placement, dtype=float))
     if targets is not None:
         for k, matrix in enumerate(_targets_matrices(targets)):
@@ -235,6 +235,12 @@ def replay_visualizer(
 
     tool_poses = [_pose_matrix(f["tool_position"], f["tool_rotation"]) for f in frames]
     placed = [pose for pose in tool_poses if pose is not None]
+    # meshcat returns every node to its static placement once the animation has played, so give
+    # the tool and the robot their first-frame poses as static placements too.
+    if placed:
+        visualizer[TOOL].set_transform(placed[0])
+    if robot_viz is not None:
+        set_robot_frame(visualizer, robot_viz, robot_q[0])
     animation = Animation(default_framerate=fps)
     for index, snapshot in enumerate(frames):
         with animation.at_frame(visualizer, index) as frame:
@@ -245,15 +251,15 @@ def replay_visualizer(
             if pose is not None:
                 frame[TOOL].set_transform(pose)
             if robot_viz is not None:
-                _robot_frame(frame, robot_viz, robot_q[index])
+                set_robot_frame(frame, robot_viz, robot_q[index])
     if not placed:
         visualizer[TOOL].set_property("visible", False)
     visualizer.set_animation(animation, play=True, repetitions=1)
     return visualizer
 
 
-def _robot_frame(frame, robot_viz: MeshcatVisualizer, q: np.ndarray) -> None:
-    """Record the robot's visual placements at configuration q (nq,) in an animation frame."""
+def set_robot_frame(frame, robot_viz: MeshcatVisualizer, q: np.ndarray) -> None:
+    """Place the robot's visual nodes at configuration q (nq,), in an animation frame or a visualizer."""
     pin.forwardKinematics(robot_viz.model, robot_viz.data, q)
     pin.updateGeometryPlacements(robot_viz.model, robot_viz.data, robot_viz.visual_model, robot_viz.visual_data)
     for index, geometry in enumerate(robot_viz.visual_model.geometryObjects):
