@@ -1,0 +1,182 @@
+"""The 3D spade world: protocol, parameters, pile at rest, scripted scoop, rewards, determinism."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from toolimit.scenes import InvalidSceneParameters, Scene, make_scene
+from toolimit.scenes.spatial.particles import GranularMaterial
+from toolimit.scenes.spatial.spade import (
+    DEPOSIT_INNER,
+    GOAL_INNER,
+    SpatialSpadeScene,
+    WORLD_HALF_SIZE,
+    scripted_scoop,
+)
+from toolimit.tools import ToolPose
+
+PARAMS = {"sand_position": np.array([1.0, -0.5, 0.0]), "sand_yaw": 2.2, "goal_position": np.array([0.2, 0.3, 0.0])}
+FAR_AWAY = ToolPose(np.array([3.0, 3.0, 1.0]), np.eye(3))
+
+
+def deposit_frame(points: np.ndarray, params=PARAMS) -> np.ndarray:
+    """World points (..., 3) in the deposit's frame (origin at its floor centre, turned by sand_yaw)."""
+    c, s = np.cos(params["sand_yaw"]), np.sin(params["sand_yaw"])
+    rotation = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    return (points - params["sand_position"]) @ rotation
+
+
+def run_scoop(scene: SpatialSpadeScene, seed: int, batch_size: int) -> None:
+    scene.reset(PARAMS, np.random.default_rng(seed), batch_size)
+    motion = scripted_scoop(PARAMS)
+    for position, rotation in zip(motion.position, motion.rotation):
+        scene.step(ToolPose(position, rotation))
+
+
+@pytest.fixture(scope="module")
+def scooped() -> SpatialSpadeScene:
+    """B = 2 instances after the scripted scoop-carry-tip motion (seed 0)."""
+    scene = SpatialSpadeScene()
+    run_scoop(scene, seed=0, batch_size=2)
+    return scene
+
+
+def test_registry_builds_the_scene_and_it_follows_the_protocol() -> None:
+    scene = make_scene("spade", "3d", n_spheres=40)
+    assert isinstance(scene, SpatialSpadeScene) and isinstance(scene, Scene)
+    assert (scene.tool, scene.world, scene.n_spheres) == ("spade", "3d", 40)
+    assert scene.control_dt == pytest.approx(1 / 24)
+    kinds = {p.name: (p.kind, p.on_ground) for p in scene.parameters}
+    assert kinds == {"sand_position": ("position", True), "sand_yaw": ("uniform", True),
+                     "goal_position": ("position", True)}
+    with pytest.raises(ValueError, match="n_spheres"):
+        SpatialSpadeScene(n_spheres=200)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"goal_position": np.array([1.3, -0.4, 0.0])}, "overlap"),
+        ({"goal_position": np.array([6.0, 0.0, 0.0])}, "world bound"),
+        ({"sand_yaw": 4.0}, "sand_yaw"),
+        ({"sand_position": np.array([1.0, 2.0])}, "sand_position"),
+    ],
+)
+def test_invalid_parameters_are_rejected_with_a_reason(change: dict, message: str) -> None:
+    scene = SpatialSpadeScene()
+    params = {**PARAMS, **change}
+    assert message in scene.invalid_reason(params)
+    with pytest.raises(InvalidSceneParameters, match=message):
+        scene.reset(params, np.random.default_rng(0))
+    assert scene.invalid_reason(PARAMS) is None
+    assert "missing" in scene.invalid_reason({"sand_yaw": 0.0})
+    # Just apart: rectangles 0.42 m wide whose centres are 0.43 m apart along x are valid.
+    touching = {"sand_position": np.zeros(3), "sand_yaw": 0.0, "goal_position": np.array([0.43, 0.0, 0.0])}
+    assert scene.invalid_reason(touching) is None
+    beyond = {**PARAMS, "sand_position": np.array([WORLD_HALF_SIZE + 0.01, 0.0, 0.0])}
+    assert "world bound" in scene.invalid_reason(beyond)
+
+
+@pytest.mark.parametrize("freeze_after", [24, None], ids=["island-sleeping", "sleeping-only"])
+def test_reset_builds_a_settled_pile_inside_the_deposit_that_stays_at_rest(freeze_after: int | None) -> None:
+    scene = SpatialSpadeScene(n_spheres=50, material=GranularMaterial(freeze_after_substeps=freeze_after))
+    scene.reset(PARAMS, np.random.default_rng(1), batch_size=2)
+    start = scene.snapshot()["sphere_positions"]
+    local = deposit_frame(start)
+    assert np.all(np.abs(local[:, :2]) < DEPOSIT_INNER / 2)
+    assert np.all(local[:, 2] < 0.1)
+    assert np.all(scene.goal_reward() == 0) and np.all(scene.dense_reward() == 0)
+    for _ in range(48):
+        scene.step(FAR_AWAY)
+    assert np.max(np.abs(scene.snapshot()["sphere_positions"] - start)) < 1e-4, "the pile must stay at rest"
+
+
+def test_first_step_places_the_tool_without_velocity() -> None:
+    """A spade that appears inside the pile moves spheres out of it without flinging them."""
+    scene = SpatialSpadeScene()
+    scene.reset(PARAMS, np.random.default_rng(2))
+    pose = scripted_scoop(PARAMS)
+    inside = ToolPose(PARAMS["sand_position"] + np.array([0.0, 0.0, 0.01]), pose.rotation[30])
+    scene.step(inside)
+    speeds = np.linalg.norm(scene.sphere_velocities, axis=-1)
+    assert speeds.max() < 0.5, f"a sphere was flung at {speeds.max():.2f} m/s"
+    assert scene.snapshot()["sphere_positions"][:, 2].max() < 0.3
+
+
+def test_step_broadcasts_one_pose_and_accepts_per_instance_poses() -> None:
+    scene = SpatialSpadeScene()
+    scene.reset(PARAMS, np.random.default_rng(0), batch_size=3)
+    motion = scripted_scoop(PARAMS)
+    scene.step(ToolPose(motion.position[0], motion.rotation[0]))
+    scene.step(ToolPose(np.repeat(motion.position[1][None], 3, 0), np.repeat(motion.rotation[1][None], 3, 0)))
+    assert scene.tool_pose.position.shape == (3, 3)
+    with pytest.raises(ValueError, match="shape"):
+        scene.step(ToolPose(np.zeros((2, 3)), np.repeat(np.eye(3)[None], 2, 0)))
+
+
+def test_scripted_scoop_carry_tip_moves_at_least_ten_spheres_into_the_box(scooped: SpatialSpadeScene) -> None:
+    rewards = scooped.goal_reward()
+    assert rewards.shape == (2,)
+    assert np.all(rewards >= 10), rewards
+    snap = scooped.snapshot()
+    offset = snap["sphere_positions"] - PARAMS["goal_position"]
+    in_box = (np.abs(offset[:, :2]).max(axis=1) < GOAL_INNER / 2) & (offset[:, 2] < 0.1)
+    assert in_box.sum() == rewards[0]
+    # Dense reward of the paper's code: 0.1 per sphere in the box, - 0.01 per sphere outside.
+    assert np.all(scooped.dense_reward() <= 0.1 * rewards + 1e-12)
+    assert np.all(scooped.dense_reward() >= 0.1 * rewards - 0.01 * (50 - rewards) - 1e-12)
+
+
+def test_success_needs_ten_spheres_for_half_of_the_steps(scooped: SpatialSpadeScene) -> None:
+    scooped = copy.deepcopy(scooped)  # the module's fixture stays as the motion left it
+    assert not np.any(scooped.is_success()), "the spheres arrived late in the motion"
+    steps = scooped.steps
+    for _ in range(steps):
+        scooped.step(scooped.tool_pose)
+        if np.all(scooped.is_success()):
+            break
+    assert np.all(scooped.is_success())
+    assert scooped.successful_steps[0] >= scooped.steps / 2
+
+
+def test_dense_reward_counts_sand_on_the_spade_while_carried() -> None:
+    scene = SpatialSpadeScene()
+    scene.reset(PARAMS, np.random.default_rng(0))
+    motion = scripted_scoop(PARAMS)
+    for k in range(60):  # scoop and lift, part of the carry
+        scene.step(ToolPose(motion.position[k], motion.rotation[k]))
+    on_spade = scene.spheres_on_spade().sum()
+    assert on_spade >= 10
+    assert scene.dense_reward()[0] == pytest.approx(0.01 * on_spade - 0.01 * scene.spheres_outside().sum())
+
+
+def test_same_seed_gives_the_same_instances_and_other_seeds_differ() -> None:
+    first, second, other = SpatialSpadeScene(), SpatialSpadeScene(), SpatialSpadeScene()
+    for scene, seed in ((first, 5), (second, 5), (other, 6)):
+        scene.reset(PARAMS, np.random.default_rng(seed), batch_size=2)
+        motion = scripted_scoop(PARAMS)
+        for k in range(40):
+            scene.step(ToolPose(motion.position[k], motion.rotation[k]))
+    np.testing.assert_array_equal(first.sphere_positions, second.sphere_positions)
+    assert not np.allclose(first.sphere_positions, other.sphere_positions)
+    assert not np.allclose(first.sphere_positions[0], first.sphere_positions[1]), "instances have their own jitter"
+
+
+def test_footprints_and_snapshot_describe_instance_zero(scooped: SpatialSpadeScene) -> None:
+    footprints = scooped.footprints()
+    assert footprints.shape == (2, 5)
+    np.testing.assert_allclose(footprints[0], [1.0, -0.5, 0.21, 0.21, 2.2])
+    np.testing.assert_allclose(footprints[1], [0.2, 0.3, 0.21, 0.21, 0.0])
+    snap = scooped.snapshot()
+    assert snap["sphere_positions"].shape == (50, 3)
+    assert snap["wall_centers"].shape == (7, 3) and snap["wall_rotations"].shape == (7, 3, 3)
+    assert snap["tool_rotation"].shape == (3, 3) and np.all(np.isfinite(snap["tool_position"]))
+    assert float(snap["in_box"]) == scooped.goal_reward()[0]
+    fresh = SpatialSpadeScene()
+    with pytest.raises(RuntimeError, match="reset"):
+        fresh.goal_reward()
+    fresh.reset(PARAMS, np.random.default_rng(0))
+    assert np.all(np.isnan(fresh.snapshot()["tool_position"]))

@@ -1,0 +1,382 @@
+"""The 3D spade world: scoop sand from a deposit and drop it into a goal box.
+
+World frame: metres, z up, ground z = 0. Following the paper's PhysX scene (kzorina/pyphysx_envs,
+``scenes/SpadeTaskScene.py``):
+
+* the **sand deposit** is a 0.4 m x 0.4 m three-walled pen (walls 0.1 m high, 1 cm thick) whose
+  centre is the parameter ``sand_position`` and whose frame is turned by ``sand_yaw`` about z; in
+  that frame the walls stand at x = -+0.2 m and at y = -0.2 m, and the side y = +0.2 m is open;
+* the **goal box** is an open-top square box of inner side ``GOAL_INNER`` (0.4 m) with walls
+  ``GOAL_WALL_HEIGHT`` (0.1 m) high, axis-aligned, centred at ``goal_position``; the ground is its
+  floor;
+* ``n_spheres`` (30-100, default 50) sand spheres of radius 2 cm start as a settled pile in the
+  middle of the deposit: two square-lattice layers, the upper one in the hollows of the lower (see
+  :func:`pile_lattice`), with a seeded horizontal jitter per instance (the instances' own
+  randomness), settled for ``SETTLE_TIME`` seconds at reset; after that the pile is at rest;
+* the spade is kinematic; the sand follows :mod:`toolimit.scenes.spatial.particles`.
+
+Rewards. The goal reward is the number of sphere centres inside the goal box (within its inner
+square, below its walls' top). The dense reward is the shaping of the paper's code
+(``SpadeTaskScene.get_environment_rewards``): 0.1 per sphere in the box, + 0.01 per sphere on the
+spade's blade (``on_spade_reward_weight``; the original's examples use 0.01), - 0.01 per sphere
+"outside" (neither in the box nor within 0.4 m horizontally of the deposit centre below 0.3 m
+height: ``out_of_box_sphere_reward``). Success (the paper): at least 10 spheres in the box for at
+least half of the control steps so far.
+
+Parameters must keep the deposit and the box apart (their ground rectangles must not overlap) and
+inside the world bound ``WORLD_HALF_SIZE`` (5 m) in x and y; both stand on the ground (the z of
+their position parameters is ignored). :func:`scripted_scoop` makes a hand-written scoop-carry-tip
+spade motion for given parameters (tests, benchmarks, notebooks).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.spatial.particles import GranularMaterial, ParticleWorld, StaticBoxes
+from toolimit.scenes.spatial.tool_geometry import SPADE_RIM_HEIGHT, tool_shapes
+from toolimit.scenes.spatial.tool_motion import batched_pose
+from toolimit.tools import ToolPose, rotation_z, tool_spec
+
+#: Half side of the square region (m, world x and y) where scene elements may stand.
+WORLD_HALF_SIZE = 5.0
+#: Inner side of the square sand deposit (m), its wall height and thickness (m).
+DEPOSIT_INNER = 0.4
+DEPOSIT_WALL_HEIGHT = 0.1
+#: Inner side of the goal box (m), its wall height (m).
+GOAL_INNER = 0.4
+GOAL_WALL_HEIGHT = 0.1
+#: Wall thickness of the deposit and the goal box (m).
+WALL_THICKNESS = 0.01
+#: Spheres in the box needed at a step for it to count towards success, and the fraction of steps.
+SUCCESS_SPHERES = 10
+SUCCESS_FRACTION = 0.5
+#: Seconds of simulation at reset that let the jittered lattice pile settle.
+SETTLE_TIME = 0.25
+#: Horizontal gap (m) between neighbouring spheres of the initial lattice (jitter is +- half of it).
+LATTICE_GAP = 0.002
+#: Dense reward weights and the deposit region of the paper's code (see the module docstring).
+DENSE_IN_BOX, DENSE_ON_SPADE, DENSE_OUTSIDE = 0.1, 0.01, -0.01
+DEPOSIT_REGION_RADIUS, DEPOSIT_REGION_HEIGHT = 0.4, 0.3
+
+
+def _walls(inner: float, height: float, sides: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (K, 3) and half extents (K, 3) of the walls ("-x", "+x", "-y", "+y") of a square pen.
+
+    The pen's frame: origin at the centre of its floor, walls outside the inner square, metres.
+    """
+    t, half = WALL_THICKNESS, inner / 2
+    along = half + t  # walls along x cover the corners
+    table = {
+        "-x": ((-half - t / 2, 0.0, height / 2), (t / 2, along, height / 2)),
+        "+x": ((half + t / 2, 0.0, height / 2), (t / 2, along, height / 2)),
+        "-y": ((0.0, -half - t / 2, height / 2), (half, t / 2, height / 2)),
+        "+y": ((0.0, half + t / 2, height / 2), (half, t / 2, height / 2)),
+    }
+    centers, halves = zip(*(table[s] for s in sides))
+    return np.array(centers), np.array(halves)
+
+
+def pile_lattice(n_spheres: int, radius: float, gap: float = LATTICE_GAP) -> np.ndarray:
+    """(n_spheres, 3) centres of a two-layer pile on the ground around the origin, metres.
+
+    The base is the smallest m x m square lattice (spacing 2 r + gap) such that it and the
+    (m-1) x (m-1) layer resting in its hollows (1 mm above touching) hold all spheres; the base is
+    filled first, the upper layer from its centre outwards. Two layers stay put: steeper piles
+    would slump (their 45-degree faces exceed the 31-degree angle of repose).
+    """
+    spacing = 2.0 * radius + gap
+    rise = np.sqrt((2.0 * radius) ** 2 - spacing**2 / 2.0) + 0.001
+    size = 1
+    while size * size + (size - 1) ** 2 < n_spheres:
+        size += 1
+    layers = []
+    for level, m in enumerate((size, size - 1)):
+        coords = (np.arange(m) - (m - 1) / 2) * spacing
+        x, y = np.meshgrid(coords, coords, indexing="ij")
+        layer = np.stack([x.ravel(), y.ravel(), np.full(m * m, radius + level * rise)], axis=-1)
+        layers.append(layer[np.argsort(np.hypot(layer[:, 0], layer[:, 1]), kind="stable")])
+    return np.concatenate(layers)[:n_spheres]
+
+
+def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two ground rectangles (cx, cy, half_length, half_width, yaw) overlap (separating axes)."""
+    def corners(rect: np.ndarray) -> np.ndarray:
+        cx, cy, hl, hw, yaw = rect
+        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        c, s = np.cos(yaw), np.sin(yaw)
+        return local @ np.array([[c, s], [-s, c]]) + np.array([cx, cy])
+
+    ca, cb = corners(a), corners(b)
+    for yaw in (a[4], b[4]):
+        for axis in (np.array([np.cos(yaw), np.sin(yaw)]), np.array([-np.sin(yaw), np.cos(yaw)])):
+            pa, pb = ca @ axis, cb @ axis
+            if pa.max() <= pb.min() or pb.max() <= pa.min():
+                return False
+    return True
+
+
+def scripted_scoop(params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
+    """A hand-made scoop-carry-tip spade motion for a scene's parameters (tests, benchmarks, notebooks).
+
+    The spade enters the deposit through its open side with the blade nearly flat on the ground
+    (handle 12 degrees up), slides under the pile to 8 cm from the back wall, lifts 0.3 m while
+    tilting the tip up 10 degrees (sand rests against the back rim), carries the blade over the goal
+    box, then raises the handle to 60 degrees so the sand slides off the open tip, and holds.
+    Returns (T, 3) head positions and (T, 3, 3) rotations (world frame) at ``fps``.
+    """
+    sand = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+    goal = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+    yaw = float(params["sand_yaw"])
+    heading = rotation_z(yaw) @ np.array([0.0, 1.0, 0.0])  # horizontal direction from tip to handle
+    up = np.array([0.0, 0.0, 1.0])
+    blade_middle = tool_spec("spade").head_length / 2
+    deg = np.pi / 180
+    keyframes = [  # time (s), head position (m), handle elevation (rad)
+        (0.0, sand + 0.45 * heading + 0.008 * up, 12 * deg),
+        (1.2, sand - 0.12 * heading + 0.008 * up, 12 * deg),
+        (1.7, sand - 0.05 * heading + 0.30 * up, -10 * deg),
+        (2.9, goal - blade_middle * heading + 0.30 * up, -10 * deg),
+        (3.5, goal - blade_middle * heading + 0.25 * up, 60 * deg),
+        (4.5, goal - blade_middle * heading + 0.25 * up, 60 * deg),
+    ]
+    key_times = np.array([k[0] for k in keyframes])
+    key_heads = np.array([k[1] for k in keyframes])
+    times = np.arange(0.0, key_times[-1] + 1e-9, 1.0 / fps)
+    heads = np.stack([np.interp(times, key_times, key_heads[:, a]) for a in range(3)], axis=-1)
+    elevation = np.interp(times, key_times, [k[2] for k in keyframes])
+    axis = np.cos(elevation)[:, None] * heading + np.sin(elevation)[:, None] * up  # tool z
+    face = -np.sin(elevation)[:, None] * heading + np.cos(elevation)[:, None] * up  # tool x, face normal
+    rotations = np.stack([face, np.cross(axis, face), axis], axis=-1)
+    return ToolPose(heads, rotations)
+
+
+class SpatialSpadeScene:
+    """Batched 3D spade scene (see the module docstring).
+
+    Args:
+        n_spheres: number of sand spheres, 30..100.
+        substeps: physics sub-steps per control step (10 -> 240 Hz).
+        material: sphere constants (radius, friction, ...).
+        control_dt: duration of one ``step``, s.
+    """
+
+    tool = "spade"
+    world = "3d"
+
+    def __init__(
+        self,
+        n_spheres: int = 50,
+        substeps: int = 10,
+        material: GranularMaterial = GranularMaterial(),
+        control_dt: float = 1.0 / CONTROL_FPS,
+    ) -> None:
+        if not 30 <= int(n_spheres) <= 100:
+            raise ValueError(f"n_spheres must be in 30..100, got {n_spheres!r}")
+        if int(substeps) < 1:
+            raise ValueError(f"substeps must be >= 1, got {substeps!r}")
+        if not (np.isfinite(control_dt) and control_dt > 0):
+            raise ValueError(f"control_dt must be a positive number, got {control_dt!r}")
+        self.n_spheres = int(n_spheres)
+        self.substeps = int(substeps)
+        self.material = material
+        self.control_dt = float(control_dt)
+        self.shapes = tool_shapes("spade")
+        self.parameters = (
+            ParameterSpec(
+                "sand_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
+                description="centre of the sand deposit's floor",
+            ),
+            ParameterSpec(
+                "sand_yaw", "uniform", low=-np.pi, high=np.pi, unit="rad",
+                description="yaw of the deposit (its open side faces its +y)",
+            ),
+            ParameterSpec(
+                "goal_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
+                description="centre of the goal box's floor",
+            ),
+        )
+        self.batch_size = 0
+        self._world: ParticleWorld | None = None
+
+    # ------------------------------------------------------------------------------- parameters
+    def _footprints_of(self, params: SceneParams) -> np.ndarray:
+        sand, goal = np.asarray(params["sand_position"], float), np.asarray(params["goal_position"], float)
+        deposit_half = DEPOSIT_INNER / 2 + WALL_THICKNESS
+        goal_half = GOAL_INNER / 2 + WALL_THICKNESS
+        return np.array([
+            [sand[0], sand[1], deposit_half, deposit_half, float(params["sand_yaw"])],
+            [goal[0], goal[1], goal_half, goal_half, 0.0],
+        ])
+
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make this scene (missing, malformed, out of bounds, overlap), or None."""
+        for spec in self.parameters:
+            if spec.name not in params:
+                return f"missing parameter {spec.name!r}"
+            value = np.asarray(params[spec.name], dtype=float)
+            if spec.kind == "position":
+                if value.shape != (3,) or not np.all(np.isfinite(value)):
+                    return f"{spec.name} must be a finite (3,) point, got {value.tolist()}"
+                if np.any(np.abs(value[:2]) > WORLD_HALF_SIZE):
+                    return f"{spec.name} {np.round(value, 3).tolist()} is beyond the world bound +-{WORLD_HALF_SIZE} m"
+            elif value.shape != () or not np.isfinite(value) or not spec.low <= value <= spec.high:
+                return f"{spec.name} must be a number in [{spec.low:.4g}, {spec.high:.4g}], got {value.tolist()}"
+        deposit, goal = self._footprints_of(params)
+        if _rectangles_overlap(deposit, goal):
+            return "the sand deposit and the goal box overlap"
+        return None
+
+    # --------------------------------------------------------------------------------- lifecycle
+    def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
+        """B instances: walls at ``params``, each pile jittered by ``rng`` then settled; no spade yet."""
+        reason = self.invalid_reason(params)
+        if reason is not None:
+            raise InvalidSceneParameters(reason)
+        if int(batch_size) < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+        b = self.batch_size = int(batch_size)
+        self.sand_position = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+        self.sand_yaw = float(params["sand_yaw"])
+        self.goal_position = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+        deposit_rotation = rotation_z(self.sand_yaw)
+        deposit_centers, deposit_halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, ("-x", "+x", "-y"))
+        goal_centers, goal_halves = _walls(GOAL_INNER, GOAL_WALL_HEIGHT, ("-x", "+x", "-y", "+y"))
+        self.walls = StaticBoxes(
+            centers=np.concatenate([self.sand_position + deposit_centers @ deposit_rotation.T,
+                                    self.goal_position + goal_centers]),
+            rotations=np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
+            half_extents=np.concatenate([deposit_halves, goal_halves]),
+        )
+        radius = self.material.radius
+        local = np.broadcast_to(pile_lattice(self.n_spheres, radius), (b, self.n_spheres, 3)).copy()
+        local[..., :2] += rng.uniform(-LATTICE_GAP / 2, LATTICE_GAP / 2, size=(b, self.n_spheres, 2))
+        self._world = ParticleWorld(self.material, self.walls, self.shapes)
+        self._world.reset(self.sand_position + local @ deposit_rotation.T)
+        settle_steps = max(1, int(round(SETTLE_TIME / self.control_dt)))
+        for _ in range(settle_steps):
+            self._world.advance(self.control_dt, self.substeps)
+        #: Control steps since reset, and (B,) steps that ended with >= SUCCESS_SPHERES in the box.
+        self.steps = 0
+        self.successful_steps = np.zeros(b, dtype=int)
+
+    def _require_reset(self) -> ParticleWorld:
+        if self._world is None:
+            raise RuntimeError("call reset() before using the scene")
+        return self._world
+
+    def step(self, tool_pose: ToolPose) -> None:
+        """Move the spade to ``tool_pose`` ((3,)/(3,3) or (B,3)/(B,3,3)) over ``control_dt`` and simulate.
+
+        The first step after ``reset`` places the spade there without velocity.
+        """
+        world = self._require_reset()
+        position, rotation = batched_pose(tool_pose, self.batch_size)
+        if world.tool_position is None:
+            world.place_tool(position, rotation)
+            world.advance(self.control_dt, self.substeps)
+        else:
+            world.advance(self.control_dt, self.substeps, position, rotation)
+        self.steps += 1
+        self.successful_steps += self.goal_reward() >= SUCCESS_SPHERES
+
+    # ----------------------------------------------------------------------------------- rewards
+    @property
+    def sphere_positions(self) -> np.ndarray:
+        """(B, N, 3) sphere centres, world frame, m (a copy)."""
+        return self._require_reset().positions.copy()
+
+    @property
+    def sphere_velocities(self) -> np.ndarray:
+        """(B, N, 3) sphere velocities, world frame, m/s (a copy; zero for sleeping spheres)."""
+        return self._require_reset().velocities.copy()
+
+    @property
+    def tool_pose(self) -> ToolPose | None:
+        """The spade's current pose ((B, 3), (B, 3, 3) world frame), None before the first step."""
+        world = self._require_reset()
+        if world.tool_position is None:
+            return None
+        return ToolPose(world.tool_position.copy(), world.tool_rotation.copy())
+
+    def spheres_in_box(self) -> np.ndarray:
+        """(B, N) bool: sphere centres inside the goal box."""
+        offset = self._require_reset().positions - self.goal_position
+        half = GOAL_INNER / 2
+        return (np.abs(offset[..., 0]) < half) & (np.abs(offset[..., 1]) < half) & (offset[..., 2] < GOAL_WALL_HEIGHT)
+
+    def spheres_on_spade(self) -> np.ndarray:
+        """(B, N) bool: sphere centres above the blade's carrying face, within its rim (tool frame)."""
+        world = self._require_reset()
+        if world.tool_position is None:
+            return np.zeros((self.batch_size, self.n_spheres), dtype=bool)
+        local = np.einsum("bnj,bja->bna", world.positions - world.tool_position[:, None], world.tool_rotation)
+        spec = tool_spec("spade")
+        return (
+            (local[..., 0] > 0.0) & (local[..., 0] < SPADE_RIM_HEIGHT + self.material.radius)
+            & (np.abs(local[..., 1]) < spec.head_width / 2) & (local[..., 2] > 0.0) & (local[..., 2] < spec.head_length)
+        )
+
+    def goal_reward(self) -> np.ndarray:
+        """(B,) number of spheres in the goal box."""
+        return np.sum(self.spheres_in_box(), axis=1).astype(float)
+
+    def dense_reward(self) -> np.ndarray:
+        """(B,) the paper code's shaping: 0.1 in box + 0.01 on spade - 0.01 outside (module docstring)."""
+        return (
+            DENSE_IN_BOX * np.sum(self.spheres_in_box(), axis=1)
+            + DENSE_ON_SPADE * np.sum(self.spheres_on_spade(), axis=1)
+            + DENSE_OUTSIDE * np.sum(self.spheres_outside(), axis=1)
+        )
+
+    def spheres_outside(self) -> np.ndarray:
+        """(B, N) bool: spheres neither in the box nor in the deposit region (within 0.4 m
+        horizontally of the deposit centre and below 0.3 m), the paper code's "outsiders"."""
+        positions = self._require_reset().positions
+        offset = positions[..., :2] - self.sand_position[:2]
+        near_deposit = (np.hypot(offset[..., 0], offset[..., 1]) < DEPOSIT_REGION_RADIUS) & (
+            positions[..., 2] < DEPOSIT_REGION_HEIGHT
+        )
+        return ~self.spheres_in_box() & ~near_deposit
+
+    def is_success(self) -> np.ndarray:
+        """(B,) bool: >= 10 spheres in the box during at least half of the steps so far."""
+        self._require_reset()
+        if self.steps == 0:
+            return np.zeros(self.batch_size, dtype=bool)
+        return self.successful_steps >= SUCCESS_FRACTION * self.steps
+
+    # ------------------------------------------------------------------------------------- views
+    def footprints(self) -> np.ndarray:
+        """(2, 5) ground rectangles (cx, cy, half_length, half_width, yaw): deposit, goal box."""
+        self._require_reset()
+        return self._footprints_of(
+            {"sand_position": self.sand_position, "sand_yaw": self.sand_yaw, "goal_position": self.goal_position}
+        )
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Instance 0: ``sphere_positions`` (N, 3) m, ``sphere_radius`` (), ``wall_centers`` (K, 3),
+        ``wall_rotations`` (K, 3, 3), ``wall_half_extents`` (K, 3) (deposit walls then goal walls),
+        ``sand_position`` (3,), ``sand_yaw`` (), ``goal_position`` (3,), ``goal_inner`` (),
+        ``goal_wall_height`` (), ``tool_position`` (3,), ``tool_rotation`` (3, 3) (NaN before the
+        first step), ``in_box`` () count; world frame, metres."""
+        world = self._require_reset()
+        placed = world.tool_position is not None
+        return {
+            "sphere_positions": world.positions[0].copy(),
+            "sphere_radius": np.array(self.material.radius),
+            "wall_centers": self.walls.centers.copy(),
+            "wall_rotations": self.walls.rotations.copy(),
+            "wall_half_extents": self.walls.half_extents.copy(),
+            "sand_position": self.sand_position.copy(),
+            "sand_yaw": np.array(self.sand_yaw),
+            "goal_position": self.goal_position.copy(),
+            "goal_inner": np.array(GOAL_INNER),
+            "goal_wall_height": np.array(GOAL_WALL_HEIGHT),
+            "tool_position": world.tool_position[0].copy() if placed else np.full(3, np.nan),
+            "tool_rotation": world.tool_rotation[0].copy() if placed else np.full((3, 3), np.nan),
+            "in_box": np.array(self.goal_reward()[0]),
+        }
