@@ -1,0 +1,172 @@
+"""The search's mechanics on a tiny fake scene: candidates, counts, rejection, determinism."""
+
+from __future__ import annotations
+
+import functools
+import json
+
+import numpy as np
+import pytest
+from align_fake_scene import FakeTargetScene, make_demo
+
+from toolimit.align.config import AlignmentConfig
+from toolimit.align.sampler import apply_alignment_sample, draw_alignment_sample
+from toolimit.align.search import align
+
+# ground_tolerance 10 m: no sample is rejected for going below the ground unless a test asks.
+CONFIG = AlignmentConfig(samples=400, candidates=4, replays=5, chunk_size=16, element_std=0.05, ground_tolerance=10.0)
+
+
+def run(workers: int = 1, config: AlignmentConfig = CONFIG, seed: int = 3, checkpoint=None, factory=None, **scene_kwargs):
+    factory = factory or functools.partial(FakeTargetScene, **scene_kwargs)
+    return align(
+        make_demo(), "spade", "planar", config, seed=seed, workers=workers, progress=False, scene_factory=factory,
+        checkpoint=checkpoint,
+    )
+
+
+def summary(result):
+    return (
+        [(c.index, c.reward, c.replay_rewards.tolist(), c.sample.to_dict()) for c in result.candidates],
+        result.samples_tried,
+        result.samples_rejected,
+        result.samples_to_first_candidate,
+        result.rejection_reasons,
+    )
+
+
+def test_first_k_candidates_in_index_order_with_their_counts():
+    result = run()
+    assert len(result.candidates) == CONFIG.candidates
+    indices = [c.index for c in result.candidates]
+    assert indices == sorted(indices)
+    assert result.samples_tried == indices[-1] + 1
+    assert result.samples_to_first_candidate == indices[0] + 1
+    assert all(c.reward > 0 and c.replay_rewards.shape == (CONFIG.replays,) for c in result.candidates)
+    assert np.isclose(result.best.reward, max(c.reward for c in result.candidates))
+    assert result.wall_time_s > 0 and result.samples_rejected == 0
+    # The demo was projected to the x-z plane and kept at the scene's 24 fps.
+    assert np.all(result.demo.head[:, 1] == 0.0) and result.demo.fps == 24.0
+
+
+def test_candidates_really_reach_the_target():
+    result = run()
+    for candidate in result.candidates:
+        _, _, poses = result.aligned_motion(candidate)
+        distance = np.linalg.norm(poses.position - candidate.sample.params["target"], axis=1).min()
+        assert distance < 1.2 * candidate.sample.params["radius"]
+
+
+def test_same_result_whatever_the_number_of_workers():
+    config = AlignmentConfig(samples=300, candidates=6, replays=3, chunk_size=8, element_std=0.05)
+    one = run(workers=1, config=config, reject_below_x=0.25)
+    two = run(workers=2, config=config, reject_below_x=0.25)
+    assert summary(one) == summary(two)
+    assert one.samples_rejected > 0 and len(one.candidates) == 6
+
+
+def test_rejections_are_counted_exactly():
+    config = AlignmentConfig(samples=120, candidates=1000, replays=2, chunk_size=32, element_std=0.05, ground_tolerance=10.0)
+    result = run(config=config, reject_below_x=0.3)
+    scene = FakeTargetScene()
+    expected = 0
+    for index in range(config.samples):
+        sample = draw_alignment_sample(
+            result.demo, result.keypoints, scene.parameters, config, config.element_covariance("xz"),
+            result.min_distance, np.random.default_rng([3, index]),
+        )
+        expected += sample.params["target"][0] < 0.3
+    assert result.samples_tried == config.samples  # fewer candidates than asked: all samples tried
+    assert result.samples_rejected == expected > 0
+    assert result.rejection_reasons == {"target: x # below #": expected}
+
+
+def test_samples_taking_the_tool_below_the_ground_are_rejected():
+    config = AlignmentConfig(samples=150, candidates=1000, replays=2, z_offset_std=0.3, ground_tolerance=0.02)
+    result = run(config=config)
+    scene = FakeTargetScene()
+    expected = 0
+    for index in range(config.samples):
+        sample = draw_alignment_sample(
+            result.demo, result.keypoints, scene.parameters, config, config.element_covariance("xz"),
+            result.min_distance, np.random.default_rng([3, index]),
+        )
+        aligned, _, _ = apply_alignment_sample(result.demo, result.keypoints, sample)
+        expected += aligned.head[:, 2].min() < -0.02
+    assert result.samples_rejected == expected > 10
+    assert result.rejection_reasons == {"sampler: the tool head goes # m below the ground": expected}
+    for candidate in result.candidates:
+        _, _, poses = result.aligned_motion(candidate)
+        assert poses.position[:, 2].min() >= -0.02
+
+
+def test_no_candidate_when_nothing_earns_a_reward():
+    config = AlignmentConfig(samples=40, candidates=2, replays=2, chunk_size=16)
+    result = run(config=config, radius_high=1e-9)
+    assert result.candidates == [] and result.best is None
+    assert result.samples_tried == 40 and result.samples_to_first_candidate is None
+
+
+def test_demo_is_resampled_to_the_control_rate_and_config_is_checked():
+    demo = make_demo(n_frames=76, fps=30.0)  # 2.5 s
+    result = align(demo, "spade", "planar", CONFIG, seed=0, progress=False, scene_factory=FakeTargetScene)
+    assert result.demo.fps == 24.0 and result.demo.n_frames == 61
+    with pytest.raises(ValueError, match="samples"):
+        AlignmentConfig(samples=0)
+    with pytest.raises(ValueError, match="workers"):
+        align(demo, "spade", "planar", CONFIG, workers=0, scene_factory=FakeTargetScene)
+
+
+def test_screening_replays_only_rewarded_samples_in_full():
+    from toolimit.align.search import SampleEvaluator
+
+    demo = make_demo()
+    result = run()
+    # Screening: a zero-reward sample ran once (or all runs, if its one run had a reward).
+    for screen, runs_of_zero_reward in ((1, {1, CONFIG.replays}), (0, {CONFIG.replays})):
+        config = AlignmentConfig(replays=CONFIG.replays, screen_replays=screen, element_std=0.05, ground_tolerance=10.0)
+        evaluator = SampleEvaluator(
+            FakeTargetScene(), result.demo, result.keypoints, config, config.element_covariance("xz"), result.min_distance, 3
+        )
+        outcomes = [evaluator.evaluate(i) for i in range(60)]
+        zero = [o for o in outcomes if o.reward == 0.0]
+        rewarded = [o for o in outcomes if o.reward > 0.0]
+        assert zero and rewarded and demo.n_frames == result.demo.n_frames
+        assert {len(o.replay_rewards) for o in zero} <= runs_of_zero_reward
+        assert min(len(o.replay_rewards) for o in zero) == min(runs_of_zero_reward)
+        assert all(len(o.replay_rewards) == CONFIG.replays and o.sample is not None for o in rewarded)
+
+
+def test_a_crashed_search_resumes_from_its_checkpoint_with_the_same_result(tmp_path, monkeypatch):
+    import toolimit.align.search as search
+
+    from align_fake_scene import CrashingScene
+
+    monkeypatch.setattr(search, "CHECKPOINT_EVERY_S", 0.0)  # save after every chunk
+    config = AlignmentConfig(samples=300, candidates=5, replays=3, chunk_size=10, element_std=0.05, ground_tolerance=10.0)
+    checkpoint = tmp_path / "search.json"
+    uninterrupted = run(config=config)
+    with pytest.raises(RuntimeError, match="simulated crash"):
+        run(config=config, checkpoint=checkpoint, factory=functools.partial(CrashingScene, 12))
+    saved = json.loads(checkpoint.read_text())
+    assert 0 < saved["samples_tried"] < uninterrupted.samples_tried and saved["candidates"]
+    resumed = run(config=config, checkpoint=checkpoint)
+    assert summary(resumed) == summary(uninterrupted)
+    assert not checkpoint.exists()  # removed once the search ends
+    # A checkpoint made under other settings is ignored (fresh search, same result).
+    checkpoint.write_text(json.dumps({**saved, "key": {**saved["key"], "seed": 99}}))
+    assert summary(run(config=config, checkpoint=checkpoint)) == summary(uninterrupted)
+
+
+def test_demo_preparation_uses_the_worlds_plane():
+    from toolimit.align.search import prepare_demo
+
+    demo = make_demo()
+    tilted = demo.rotated_yaw(0.7)  # motion no longer along x
+    flat, plane = prepare_demo(tilted, "hammer", "planar", 1 / 24)
+    assert plane == "xz" and np.all(flat.head[:, 1] == 0.0)
+    np.testing.assert_allclose(np.ptp(flat.head[:, 0]), np.ptp(demo.head[:, 0]), rtol=1e-6)
+    same, plane = prepare_demo(tilted, "scythe", "planar", 1 / 24)
+    assert plane == "xy" and np.array_equal(same.head, tilted.head)
+    spatial, plane = prepare_demo(tilted, "spade", "3d", 1 / 24)
+    assert plane is None and np.array_equal(spatial.head, tilted.head)

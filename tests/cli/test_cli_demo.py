@@ -1,0 +1,49 @@
+"""``toolimit demo synth`` / ``show``: files written, summaries printed, user errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from toolimit.cli import main
+from toolimit.demos import load_demo, synthesize_demo
+
+
+def test_synth_writes_the_generators_demo(capsys, tmp_path):
+    out = tmp_path / "demos" / "hammer_07.npz"
+    assert main(["demo", "synth", "--tool", "hammer", "--seed", "7", "--out", str(out)]) == 0
+    assert "hammer" in capsys.readouterr().out
+    demo = load_demo(out)
+    expected = synthesize_demo("hammer", 7, fps=24.0)
+    np.testing.assert_allclose(demo.head, expected.head)
+    np.testing.assert_allclose(demo.handle, expected.handle)
+    assert demo.fps == 24.0 and demo.tool == "hammer"
+
+
+def test_synth_fps_and_show_summary(capsys, tmp_path):
+    out = tmp_path / "spade.npz"
+    assert main(["demo", "synth", "--tool", "spade", "--seed", "1", "--fps", "30", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["demo", "show", str(out)]) == 0
+    printed = capsys.readouterr().out
+    demo = load_demo(out)
+    assert f"{demo.n_frames} frames at 30 fps" in printed
+    assert "keypoints (frames): [0," in printed and f"{demo.n_frames - 1}]" in printed
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["demo", "synth", "--tool", "rake", "--out", "x.npz"], "rake"),
+        (["demo", "synth", "--tool", "spade", "--fps", "0", "--out", "x.npz"], "--fps"),
+        (["demo", "synth", "--tool", "spade", "--seed", "-3", "--out", "x.npz"], "--seed"),
+        (["demo", "synth", "--tool", "spade", "--out", "x.txt"], "--out"),
+        (["demo", "show", "missing.npz"], "missing.npz"),
+    ],
+)
+def test_user_errors(capsys, tmp_path, monkeypatch, argv, fragment):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and fragment in err, err
+    assert not any(tmp_path.iterdir())

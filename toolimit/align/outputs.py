@@ -1,0 +1,105 @@
+"""The alignment's files: ``alignment.json`` (the search's record) and ``aligned_demo.npz``.
+
+Formats are the project's shared ones (see the README of the pipeline): the aligned demo is a
+demo file (head, handle, fps, tool) of the best candidate's motion in the scene's world frame plus
+the tool-frame poses (``tip_position`` (T, 3) m, ``tip_quaternion_wxyz`` (T, 4) scalar first), the
+per-frame roll (T,) rad, the scene's world and every scene parameter as ``param_<name>``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from toolimit.align.search import AlignmentResult, Candidate
+from toolimit.artifacts import save_json, save_npz
+
+ALIGNMENT_JSON = "alignment.json"
+ALIGNED_DEMO_NPZ = "aligned_demo.npz"
+
+
+def continuous_quaternions_wxyz(rotation: np.ndarray) -> np.ndarray:
+    """(T, 4) unit quaternions (w, x, y, z) of rotations (T, 3, 3), signs chosen without jumps."""
+    quaternions = Rotation.from_matrix(rotation).as_quat(scalar_first=True)
+    for t in range(1, len(quaternions)):
+        if np.dot(quaternions[t], quaternions[t - 1]) < 0.0:
+            quaternions[t] = -quaternions[t]
+    return quaternions
+
+
+def alignment_record(result: AlignmentResult, demo_path: str, **extra: Any) -> dict[str, Any]:
+    """The content of ``alignment.json``: the shared keys, the search's diagnostics, ``extra``."""
+    best = result.best
+    return {
+        "tool": result.tool,
+        "world": result.world,
+        "demo": demo_path,
+        "seed": result.seed,
+        "samples_tried": result.samples_tried,
+        "samples_rejected": result.samples_rejected,
+        "samples_to_first_candidate": result.samples_to_first_candidate,
+        "wall_time_s": round(result.wall_time_s, 3),
+        "best_index": None if best is None else best.index,
+        "candidates": [_candidate_record(c) for c in result.candidates],
+        "rejection_reasons": result.rejection_reasons,
+        "plane": result.plane,
+        "keypoints": result.keypoints.tolist(),
+        "min_element_distance_m": result.min_distance,
+        "config": result.config.to_dict(),
+        **extra,
+    }
+
+
+def _candidate_record(candidate: Candidate) -> dict[str, Any]:
+    sample = candidate.sample.to_dict()
+    return {
+        "reward": candidate.reward,
+        "params": sample.pop("params"),
+        "sample_index": candidate.index,
+        "replay_rewards": candidate.replay_rewards.tolist(),
+        **sample,
+    }
+
+
+def aligned_demo_arrays(result: AlignmentResult, candidate: Candidate) -> dict[str, Any]:
+    """The arrays of ``aligned_demo.npz`` for ``candidate``."""
+    aligned, roll, poses = result.aligned_motion(candidate)
+    arrays: dict[str, Any] = {
+        "head": aligned.head,
+        "handle": aligned.handle,
+        "fps": np.float64(aligned.fps),
+        "tool": np.str_(result.tool),
+        "tip_position": poses.position,
+        "tip_quaternion_wxyz": continuous_quaternions_wxyz(poses.rotation),
+        "roll": roll,
+        "scene_world": np.str_(result.world),
+        "keypoints": result.keypoints,
+        "reward": np.float64(candidate.reward),
+    }
+    for name, value in candidate.sample.params.items():
+        arrays[f"param_{name}"] = np.asarray(value, dtype=float)
+    return arrays
+
+
+def write_alignment(result: AlignmentResult, out_dir: str | Path, demo_path: str, **extra: Any) -> list[Path]:
+    """Write ``alignment.json`` and, when a candidate exists, ``aligned_demo.npz`` (atomically).
+
+    Without a candidate, a stale ``aligned_demo.npz`` from an earlier run in ``out_dir`` is
+    removed so that the folder never pairs a record with another run's motion. ``extra`` keys
+    (JSON values) are added to the record. Returns the paths written.
+    """
+    out_dir = Path(out_dir)
+    written = []
+    best = result.best
+    demo_file = out_dir / ALIGNED_DEMO_NPZ
+    if best is not None:
+        save_npz(demo_file, **aligned_demo_arrays(result, best))
+        written.append(demo_file)
+    else:
+        demo_file.unlink(missing_ok=True)
+    save_json(out_dir / ALIGNMENT_JSON, alignment_record(result, demo_path, **extra))
+    written.append(out_dir / ALIGNMENT_JSON)
+    return written

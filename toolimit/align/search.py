@@ -1,0 +1,366 @@
+"""The alignment search: sample, replay, keep the first K samples that earn a goal reward.
+
+Every sample i draws from its own generator ``np.random.default_rng([seed, i])`` and resets the
+scene from it, so a sample's outcome depends only on (seed, i). Worker processes evaluate chunks
+of consecutive indices and the parent merges them in index order, stopping once the index-ordered
+prefix holds K candidates: the result is the same whatever the number of workers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import multiprocessing
+import re
+import time
+from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from toolimit.align.checkpoint import checkpoint_key, load_checkpoint, save_checkpoint
+from toolimit.align.config import DEMO_PLANES, AlignmentConfig
+from toolimit.align.keypoints import velocity_keypoints
+from toolimit.align.sampler import (
+    AlignmentSample,
+    apply_alignment_sample,
+    draw_alignment_sample,
+    minimum_element_distance,
+)
+from toolimit.demos.tool_demo import ToolDemo
+from toolimit.scenes.base import InvalidSceneParameters, Scene
+from toolimit.scenes.registry import make_scene
+from toolimit.tools import ToolPose
+
+SceneFactory = Callable[[], Scene]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A sample whose replays earned a non-zero mean goal reward.
+
+    Attributes:
+        index: the sample's index (its generator is ``default_rng([seed, index])``).
+        reward: mean final goal reward over the replays.
+        replay_rewards: (replays,) final goal reward of each replay.
+        sample: the drawn scale, z offset, rolls and scene parameters.
+    """
+
+    index: int
+    reward: float
+    replay_rewards: np.ndarray
+    sample: AlignmentSample
+
+
+@dataclass(frozen=True)
+class SampleOutcome:
+    """What happened to one sample: rejected (with the reason) or replayed (with its rewards)."""
+
+    index: int
+    rejection: str | None = None
+    replay_rewards: np.ndarray | None = None
+    sample: AlignmentSample | None = None
+
+    @property
+    def reward(self) -> float:
+        return 0.0 if self.replay_rewards is None else float(np.mean(self.replay_rewards))
+
+
+@dataclass
+class AlignmentResult:
+    """The search's outcome.
+
+    Attributes:
+        tool, world: the scene aligned to.
+        plane: the plane the demo was projected on ("xz", "xy") or None (3D).
+        seed: the search's seed.
+        config: the settings used.
+        demo: the demonstration as replayed before a sample's transform: resampled to the scene's
+            control rate and projected to ``plane``; world frame, metres.
+        keypoints: (K,) frame indices of ``demo``.
+        min_distance: d_th between scene elements, metres.
+        candidates: the first ``config.candidates`` candidates in sample-index order.
+        samples_tried: samples in the index-ordered prefix the search examined.
+        samples_rejected: of those, samples the sampler or the scene rejected.
+        samples_to_first_candidate: index of the first candidate + 1, None if none.
+        rejection_reasons: rejected samples per reason (its message with numbers replaced by '#').
+        wall_time_s: seconds the search took, worker start-up included (summed over resumed runs).
+    """
+
+    tool: str
+    world: str
+    plane: str | None
+    seed: int
+    config: AlignmentConfig
+    demo: ToolDemo
+    keypoints: np.ndarray
+    min_distance: float
+    candidates: list[Candidate] = field(default_factory=list)
+    samples_tried: int = 0
+    samples_rejected: int = 0
+    samples_to_first_candidate: int | None = None
+    rejection_reasons: dict[str, int] = field(default_factory=dict)
+    wall_time_s: float = 0.0
+
+    @property
+    def best(self) -> Candidate | None:
+        """The candidate with the highest mean reward (the earliest among equals), None if none."""
+        if not self.candidates:
+            return None
+        return max(self.candidates, key=lambda c: (c.reward, -c.index))
+
+    def aligned_motion(self, candidate: Candidate) -> tuple[ToolDemo, np.ndarray, ToolPose]:
+        """The candidate's aligned demo, per-frame roll (T,) rad and tool poses in the world frame."""
+        return apply_alignment_sample(self.demo, self.keypoints, candidate.sample)
+
+
+def prepare_demo(demo: ToolDemo, tool: str, world: str, control_dt: float) -> tuple[ToolDemo, str | None]:
+    """The demo at the scene's control rate (1 / control_dt fps), projected onto the world's plane."""
+    fps = 1.0 / control_dt
+    if not np.isclose(demo.fps, fps):
+        demo = demo.resampled(fps)
+    plane = DEMO_PLANES.get((tool, world))
+    if plane is not None:
+        demo = demo.projected_to_plane(plane)
+    return demo, plane
+
+
+class SampleEvaluator:
+    """Draws and replays samples in one scene (one per process)."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        demo: ToolDemo,
+        keypoints: np.ndarray,
+        config: AlignmentConfig,
+        covariance: np.ndarray,
+        min_distance: float,
+        seed: int,
+    ) -> None:
+        self.scene = scene
+        self.demo = demo
+        self.keypoints = keypoints
+        self.config = config
+        self.covariance = covariance
+        self.min_distance = min_distance
+        self.seed = seed
+
+    def draw(self, rng: np.random.Generator) -> AlignmentSample | None:
+        """A sample from ``rng`` (the sample's own generator), None if its elements cannot be placed."""
+        return draw_alignment_sample(
+            self.demo, self.keypoints, self.scene.parameters, self.config, self.covariance, self.min_distance, rng
+        )
+
+    def evaluate(self, index: int) -> SampleOutcome:
+        """Draw sample ``index`` from ``default_rng([seed, index])``, check it, replay it.
+
+        The same generator then resets the scene (screening runs first, if any), so the outcome
+        depends only on (seed, index).
+        """
+        rng = np.random.default_rng([self.seed, index])
+        sample = self.draw(rng)
+        if sample is None:
+            return SampleOutcome(index, rejection="sampler: elements closer than the minimum distance")
+        reason = self.scene.invalid_reason(sample.params)
+        if reason is not None:
+            return SampleOutcome(index, rejection=reason)
+        aligned, _, poses = apply_alignment_sample(self.demo, self.keypoints, sample)
+        depth = -aligned.head[:, 2].min()
+        if depth > self.config.ground_tolerance:
+            return SampleOutcome(index, rejection=f"sampler: the tool head goes {depth:.3f} m below the ground")
+        try:
+            if self.config.screen_replays > 0:
+                screened = self._replay(sample, poses, rng, self.config.screen_replays)
+                if not np.any(screened != 0.0):
+                    return SampleOutcome(index, replay_rewards=screened)
+            rewards = self._replay(sample, poses, rng, self.config.replays)
+        except InvalidSceneParameters as error:
+            return SampleOutcome(index, rejection=str(error))
+        keep = sample if np.mean(rewards) != 0.0 else None
+        return SampleOutcome(index, replay_rewards=rewards, sample=keep)
+
+    def _replay(self, sample: AlignmentSample, poses: ToolPose, rng: np.random.Generator, runs: int) -> np.ndarray:
+        """(runs,) final goal reward of ``runs`` instances that follow ``poses``."""
+        self.scene.reset(sample.params, rng, batch_size=runs)
+        for position, rotation in zip(poses.position, poses.rotation):
+            self.scene.step(ToolPose(position, rotation))
+        return np.asarray(self.scene.goal_reward(), dtype=float).reshape(runs)
+
+    def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
+        return [self.evaluate(index) for index in range(start, stop)]
+
+
+#: The evaluator of a worker process, built once by :func:`_init_worker`.
+_WORKER_EVALUATOR: SampleEvaluator | None = None
+
+
+def _init_worker(scene_factory: SceneFactory, *evaluator_args: object) -> None:
+    global _WORKER_EVALUATOR
+    _WORKER_EVALUATOR = SampleEvaluator(scene_factory(), *evaluator_args)  # type: ignore[arg-type]
+
+
+def _evaluate_range_in_worker(start: int, stop: int) -> list[SampleOutcome]:
+    assert _WORKER_EVALUATOR is not None, "worker not initialised"
+    return _WORKER_EVALUATOR.evaluate_range(start, stop)
+
+
+def _chunks(first: int, total: int, size: int) -> Iterator[tuple[int, int]]:
+    for start in range(first, total, size):
+        yield start, min(start + size, total)
+
+
+def _outcomes_in_order(
+    evaluator: SampleEvaluator, scene_factory: SceneFactory, config: AlignmentConfig, workers: int, first: int
+) -> Iterator[list[SampleOutcome]]:
+    """Chunks of outcomes in index order from sample ``first``; the consumer stops when it has enough."""
+    chunks = _chunks(first, config.samples, config.chunk_size)
+    if workers == 1:
+        for start, stop in chunks:
+            yield evaluator.evaluate_range(start, stop)
+        return
+    init_args = (
+        scene_factory,
+        evaluator.demo,
+        evaluator.keypoints,
+        evaluator.config,
+        evaluator.covariance,
+        evaluator.min_distance,
+        evaluator.seed,
+    )
+    context = multiprocessing.get_context("spawn")
+    executor = ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=init_args)
+    pending: list[Future[list[SampleOutcome]]] = []
+    try:
+        for start, stop in chunks:
+            pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
+            if len(pending) >= 2 * workers:
+                yield pending.pop(0).result()
+        while pending:
+            yield pending.pop(0).result()
+    finally:
+        executor.shutdown(wait=True, cancel_futures=True)
+
+
+def align(
+    demo: ToolDemo,
+    tool: str,
+    world: str,
+    config: AlignmentConfig | None = None,
+    seed: int = 0,
+    workers: int = 1,
+    progress: bool = True,
+    scene_factory: SceneFactory | None = None,
+    checkpoint: str | Path | None = None,
+) -> AlignmentResult:
+    """Search scene parameters, scale, z offset and rolls under which ``demo`` reaches the goal.
+
+    Args:
+        demo: the demonstration (world frame, metres), any frame rate.
+        tool, world: the scene, built with :func:`toolimit.scenes.registry.make_scene`.
+        config: search settings (default :class:`AlignmentConfig`).
+        seed: sample i uses ``np.random.default_rng([seed, i])``.
+        workers: processes evaluating samples; the result does not depend on it.
+        progress: show a tqdm bar.
+        scene_factory: a picklable callable making the scene instead of the registry (tests,
+            researchers' own scenes); every worker calls it once.
+        checkpoint: a JSON file where the search saves its progress (every few seconds) and from
+            which it resumes when the file was made with the same demo, scene, seed and settings;
+            it is removed when the search ends.
+
+    The demo is resampled to the scene's control rate and projected onto the world's plane
+    (:data:`~toolimit.align.config.DEMO_PLANES`); keypoints and the minimum element distance d_th
+    come from that prepared demo's head path. Workers are started with the "spawn" method: a
+    script calling ``align(..., workers > 1)`` needs the ``if __name__ == "__main__":`` guard.
+    """
+    config = config or AlignmentConfig()
+    if not (isinstance(workers, int) and workers >= 1):
+        raise ValueError(f"workers: expected a positive integer, got {workers!r}")
+    started = time.perf_counter()
+    scene_factory = scene_factory or functools.partial(make_scene, tool, world)
+    scene = scene_factory()
+    prepared, plane = prepare_demo(demo, tool, world, scene.control_dt)
+    keypoints = velocity_keypoints(prepared, config.keypoint_fraction)
+    min_distance = minimum_element_distance(prepared.head)
+    evaluator = SampleEvaluator(
+        scene, prepared, keypoints, config, config.element_covariance(plane), min_distance, seed
+    )
+    result = AlignmentResult(tool, world, plane, seed, config, prepared, keypoints, min_distance)
+    key = checkpoint_key(tool, world, seed, config, prepared)
+    previous_time = 0.0
+    if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:
+        previous_time = _restore(result, state, evaluator)
+    bar = tqdm(total=config.samples, initial=result.samples_tried, desc=f"align {tool}/{world}", unit="sample",
+               disable=not progress)
+    last_save = time.perf_counter()
+    chunks = _outcomes_in_order(evaluator, scene_factory, config, workers, first=result.samples_tried)
+    with bar, contextlib.closing(chunks):
+        for outcomes in chunks:
+            enough = _merge(result, outcomes)
+            bar.set_postfix(candidates=len(result.candidates), rejected=result.samples_rejected, refresh=False)
+            bar.update(result.samples_tried - bar.n)
+            if enough:
+                break
+            if checkpoint is not None and time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+                result.wall_time_s = previous_time + time.perf_counter() - started
+                save_checkpoint(checkpoint, key, _state(result))
+                last_save = time.perf_counter()
+    result.wall_time_s = previous_time + time.perf_counter() - started
+    if checkpoint is not None:
+        Path(checkpoint).unlink(missing_ok=True)
+    return result
+
+
+def _state(result: AlignmentResult) -> dict[str, Any]:
+    """The search's progress as JSON values (see :mod:`toolimit.align.checkpoint`)."""
+    return {
+        "samples_tried": result.samples_tried,
+        "samples_rejected": result.samples_rejected,
+        "samples_to_first_candidate": result.samples_to_first_candidate,
+        "rejection_reasons": result.rejection_reasons,
+        "wall_time_s": result.wall_time_s,
+        "candidates": [{"index": c.index, "replay_rewards": c.replay_rewards.tolist()} for c in result.candidates],
+    }
+
+
+def _restore(result: AlignmentResult, state: dict[str, Any], evaluator: SampleEvaluator) -> float:
+    """Set ``result`` to a checkpoint's progress (candidate samples re-drawn); returns its time, s."""
+    result.samples_tried = int(state["samples_tried"])
+    result.samples_rejected = int(state["samples_rejected"])
+    result.samples_to_first_candidate = state["samples_to_first_candidate"]
+    result.rejection_reasons = {str(k): int(v) for k, v in state["rejection_reasons"].items()}
+    for saved in state["candidates"]:
+        index = int(saved["index"])
+        sample = evaluator.draw(np.random.default_rng([result.seed, index]))
+        assert sample is not None, f"checkpoint candidate {index} no longer draws a sample"
+        rewards = np.asarray(saved["replay_rewards"], dtype=float)
+        result.candidates.append(Candidate(index, float(np.mean(rewards)), rewards, sample))
+    return float(state["wall_time_s"])
+
+
+#: Seconds between checkpoint writes.
+CHECKPOINT_EVERY_S = 5.0
+
+#: Numbers in a rejection message, replaced by '#' so that reasons of one kind count together.
+_NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+
+
+def _merge(result: AlignmentResult, outcomes: list[SampleOutcome]) -> bool:
+    """Add a chunk's outcomes (in index order) to ``result``; True once it holds K candidates."""
+    for outcome in outcomes:
+        result.samples_tried = outcome.index + 1
+        if outcome.rejection is not None:
+            result.samples_rejected += 1
+            reason = _NUMBER.sub("#", outcome.rejection)
+            result.rejection_reasons[reason] = result.rejection_reasons.get(reason, 0) + 1
+        elif outcome.sample is not None:
+            assert outcome.replay_rewards is not None
+            result.candidates.append(Candidate(outcome.index, outcome.reward, outcome.replay_rewards, outcome.sample))
+            if result.samples_to_first_candidate is None:
+                result.samples_to_first_candidate = outcome.index + 1
+            if len(result.candidates) >= result.config.candidates:
+                return True
+    return False

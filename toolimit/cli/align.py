@@ -1,0 +1,125 @@
+"""``toolimit align``: find scene parameters under which a demonstration reaches the goal.
+
+Writes ``DIR/alignment.json`` (the search's record) and ``DIR/aligned_demo.npz`` (the best
+candidate's aligned motion). An interrupted search (Ctrl-C: exit code 130) leaves ``DIR/alignment_checkpoint.json``; the
+same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
+is still written, with an empty candidate list, and no aligned demo), 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from toolimit.cli import CliError
+
+DEFAULT_SAMPLES = 20_000
+#: The search's progress in the output folder while it runs (removed when it ends).
+CHECKPOINT_JSON = "alignment_checkpoint.json"
+DEFAULT_CANDIDATES = 5
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "align",
+        help="align a scene to a demonstration (stage ii)",
+        description="Find scene parameters under which a demonstration reaches the goal (stage ii): "
+        "writes OUT/alignment.json and OUT/aligned_demo.npz. Exit code 1 when no candidate is found.",
+    )
+    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+    parser.add_argument("--world", default="planar", help="planar or 3d (default: planar)")
+    parser.add_argument("--demo", required=True, type=Path, help="demonstration file (project .npz, real aligned .npz or estimator .pkl)")
+    parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES, help="sample budget (default: 20000)")
+    parser.add_argument(
+        "--candidates", type=int, default=DEFAULT_CANDIDATES,
+        help=f"stop after this many samples with a reward (default: {DEFAULT_CANDIDATES})",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument(
+        "--workers", type=int, default=None,
+        help="worker processes (default: up to 4, one per CPU core); results do not depend on it",
+    )
+    parser.add_argument("--out", required=True, type=Path, help="output folder")
+    parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
+    parser.add_argument("--no-clean", action="store_true", help="use the demo as loaded, without cleaning")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run)
+
+
+def _check_arguments(args: argparse.Namespace) -> int:
+    """Validate before any work; returns the worker count."""
+    from toolimit.scenes.registry import WORLDS, available_scenes
+
+    if args.world not in WORLDS:
+        raise CliError(f"--world: unknown world {args.world!r}; choose one of {', '.join(WORLDS)}")
+    tools = sorted(tool for tool, world in available_scenes() if world == args.world)
+    if args.tool not in tools:
+        raise CliError(f"--tool: unknown tool {args.tool!r} for world {args.world}; choose one of {', '.join(tools)}")
+    for name in ("samples", "candidates"):
+        if getattr(args, name) <= 0:
+            raise CliError(f"--{name}: must be a positive integer, got {getattr(args, name)}")
+    if args.seed < 0:
+        raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
+    workers = args.workers if args.workers is not None else max(1, min(4, os.cpu_count() or 1))
+    if workers <= 0:
+        raise CliError(f"--workers: must be a positive integer, got {workers}")
+    if not args.demo.is_file():
+        raise CliError(f"--demo: no such file: {args.demo}")
+    if args.out.exists() and not args.out.is_dir():
+        raise CliError(f"--out: {args.out} exists and is not a folder")
+    if args.rerun is not None and args.rerun.suffix != ".rrd":
+        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    return workers
+
+
+def run(args: argparse.Namespace) -> int:
+    from toolimit.align.config import AlignmentConfig
+    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, write_alignment
+    from toolimit.align.search import align
+    from toolimit.demos import clean_demo, load_demo
+
+    workers = _check_arguments(args)
+    demo = load_demo(args.demo, tool=args.tool)  # also names the tool of files that do not store it
+    if not args.no_clean:
+        demo, report = clean_demo(demo)
+        print(f"cleaned demo: {len(report.replaced_frames)} of {demo.n_frames} frames replaced")
+    config = AlignmentConfig(samples=args.samples, candidates=args.candidates)
+    checkpoint = args.out / CHECKPOINT_JSON
+    if checkpoint.is_file():
+        print(f"found {checkpoint}: the search resumes from it if it was made with the same settings")
+    try:
+        result = align(
+            demo, args.tool, args.world, config, seed=args.seed, workers=workers, progress=not args.quiet,
+            checkpoint=checkpoint,
+        )
+    except KeyboardInterrupt:
+        print(f"interrupted: run the same command again to resume from {checkpoint}", file=sys.stderr)
+        return 130
+    write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
+    rejected = result.samples_rejected / max(result.samples_tried, 1)
+    print(
+        f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples "
+        f"({rejected:.0%} rejected), {result.wall_time_s:.1f} s with {workers} worker(s)"
+    )
+    if args.rerun is not None:
+        from toolimit.viz.rerun_alignment import save_alignment_recording
+
+        written = save_alignment_recording(result, args.rerun)
+        print(f"rerun recording: {args.rerun}" if written else "rerun recording skipped (RERUN=off)")
+    best = result.best
+    if best is None:
+        print(
+            f"no candidate: no sample earned a goal reward within {args.samples} samples; "
+            f"wrote {args.out / ALIGNMENT_JSON} (empty candidate list), no {ALIGNED_DEMO_NPZ}. "
+            "Try more --samples or another --seed.",
+            file=sys.stderr,
+        )
+        return 1
+    print(
+        f"best: sample {best.index}, mean goal reward {best.reward:.3f} "
+        f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m); "
+        f"wrote {args.out / ALIGNMENT_JSON} and {args.out / ALIGNED_DEMO_NPZ}"
+    )
+    return 0

@@ -1,0 +1,118 @@
+"""A rerun recording of an alignment: the demonstration, its keypoints, the scene and a replay.
+
+Entities (world frame, metres, z up): ``demo/head`` and ``demo/handle`` paths of the demonstration
+as replayed (aligned by the best candidate when there is one), ``demo/keypoints`` on the head path,
+``scene/params/<name>`` the candidate's element positions, then on the ``time`` timeline (seconds)
+one replay: ``replay/tool`` (head-to-handle segment), ``replay/tool_x`` (the tool frame's working
+direction, showing the sampled roll), ``replay/state/<key>`` the scene's snapshot arrays and
+``replay/goal_reward``. ``RERUN=off`` disables it (nothing is written).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+
+from toolimit.align.sampler import draw_alignment_sample
+from toolimit.align.search import AlignmentResult
+from toolimit.artifacts import atomic_path
+from toolimit.scenes.base import Scene
+from toolimit.scenes.registry import make_scene
+from toolimit.tools import ToolPose
+
+HEAD_COLOUR = (230, 120, 30)
+HANDLE_COLOUR = (60, 140, 230)
+KEYPOINT_COLOUR = (220, 30, 60)
+ELEMENT_COLOUR = (40, 170, 80)
+STATE_COLOUR = (150, 150, 150)
+
+
+def save_alignment_recording(result: AlignmentResult, path: str | Path, scene: Scene | None = None) -> Path | None:
+    """Write the recording of ``result`` to ``path`` (.rrd); None when rerun is disabled.
+
+    ``scene`` replays the best candidate (default: a new scene from the registry): one instance
+    reset from the candidate's own generator right after its draw, which is exactly the search's
+    first run of that sample when it screened with one run (the default).
+    """
+    recording = rr.RecordingStream("toolimit_alignment")
+    if not recording.is_enabled():
+        return None
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        recording.save(tmp)
+        _log_alignment(recording, result, scene)
+        recording.flush()
+        recording.disconnect()
+    return path
+
+
+def _log_alignment(recording: rr.RecordingStream, result: AlignmentResult, scene: Scene | None) -> None:
+    best = result.best
+    if best is None:
+        demo, poses = result.demo, None
+    else:
+        demo, _, poses = result.aligned_motion(best)
+    recording.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    recording.log("demo/head", rr.LineStrips3D([demo.head], colors=HEAD_COLOUR), static=True)
+    recording.log("demo/handle", rr.LineStrips3D([demo.handle], colors=HANDLE_COLOUR), static=True)
+    recording.log(
+        "demo/keypoints",
+        rr.Points3D(
+            demo.head[result.keypoints],
+            radii=0.015,
+            colors=KEYPOINT_COLOUR,
+            labels=[f"frame {k}" for k in result.keypoints],
+        ),
+        static=True,
+    )
+    recording.log(
+        "search",
+        rr.TextDocument(
+            f"{result.tool} / {result.world}: {len(result.candidates)} candidate(s) in "
+            f"{result.samples_tried} samples ({result.samples_rejected} rejected), "
+            f"seed {result.seed}, {result.wall_time_s:.1f} s"
+        ),
+        static=True,
+    )
+    if best is None or poses is None:
+        return
+    for name, value in best.sample.params.items():
+        value = np.asarray(value, dtype=float)
+        if value.shape == (3,):
+            recording.log(
+                f"scene/params/{name}", rr.Points3D([value], radii=0.03, colors=ELEMENT_COLOUR, labels=[name]), static=True
+            )
+    scene = scene or make_scene(result.tool, result.world)
+    rng = np.random.default_rng([result.seed, best.index])
+    draw_alignment_sample(  # advance the generator exactly as the search did before its reset
+        result.demo, result.keypoints, scene.parameters, result.config,
+        result.config.element_covariance(result.plane), result.min_distance, rng,
+    )
+    scene.reset(best.sample.params, rng, batch_size=1)
+    for frame, (position, rotation) in enumerate(zip(poses.position, poses.rotation)):
+        scene.step(ToolPose(position, rotation))
+        recording.set_time("time", duration=frame * scene.control_dt)
+        recording.log("replay/tool", rr.LineStrips3D([[demo.head[frame], demo.handle[frame]]], radii=0.01))
+        recording.log("replay/tool_x", rr.Arrows3D(vectors=[0.1 * rotation[:, 0]], origins=[position]))
+        recording.log("replay/goal_reward", rr.Scalars(float(np.asarray(scene.goal_reward())[0])))
+        _log_snapshot(recording, scene.snapshot())
+
+
+def _log_snapshot(recording: rr.RecordingStream, snapshot: dict[str, np.ndarray]) -> None:
+    """Segments (M, 2, 3) as lines, points (..., 3) as points, scalars as plots.
+
+    Sizes and orientations (keys ending in ``extents`` or ``rotation``) and non-numeric arrays are
+    not drawn: they are (..., 3) arrays that are not positions.
+    """
+    for key, value in snapshot.items():
+        value = np.asarray(value)
+        if value.dtype.kind not in "fiub" or key.endswith(("extents", "rotation")):
+            continue
+        if value.ndim == 3 and value.shape[1:] == (2, 3):
+            recording.log(f"replay/state/{key}", rr.LineStrips3D(value, radii=0.005, colors=STATE_COLOUR))
+        elif value.ndim >= 1 and value.shape[-1] == 3:
+            recording.log(f"replay/state/{key}", rr.Points3D(value.reshape(-1, 3), radii=0.01, colors=STATE_COLOUR))
+        elif value.size == 1:
+            recording.log(f"replay/state/{key}", rr.Scalars(float(value.reshape(()))))
