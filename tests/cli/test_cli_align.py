@@ -56,6 +56,8 @@ def assert_user_error(capsys, argv: list[str], fragment: str, out: Path) -> None
         (["--workers", "0"], "--workers"),
         (["--seed", "-1"], "--seed"),
         (["--rerun", "view.txt"], "--rerun"),
+        (["--html", "view.txt"], "--html"),
+        (["--html", "view.html"], "3d worlds"),
     ],
 )
 def test_bad_numbers_are_user_errors(capsys, tmp_path, demo_file, extra, fragment):
@@ -154,3 +156,19 @@ def test_real_spade_trajectory_aligns_in_the_planar_spade_scene(capsys, tmp_path
     assert set(best["params"]) == {"sand_position", "goal_position"}
     aligned = np.load(out / "aligned_demo.npz")
     assert np.all(aligned["tip_position"][:, 1] == 0.0)  # projected onto the x-z plane
+
+
+def test_html_replay_of_a_3d_alignment(capsys, tmp_path):
+    """``--world 3d --html`` writes the best candidate's replay as one self-contained page."""
+    from toolimit.demos import synthesize_demo
+
+    demo = tmp_path / "hammer.npz"
+    save_demo(synthesize_demo("hammer", seed=0), demo)
+    out, page = tmp_path / "run", tmp_path / "replay.html"
+    argv = ["align", "--tool", "hammer", "--world", "3d", "--demo", str(demo), "--samples", "200",
+            "--candidates", "1", "--workers", "1", "--quiet", "--out", str(out), "--html", str(page)]
+    assert main(argv) == 0, capsys.readouterr().err
+    text = page.read_text()
+    assert text.lstrip().lower().startswith("<!doctype html") or "<html" in text[:500].lower()
+    assert len(text) > 50_000 and "base64" in text  # the scene and its animation are embedded
+    assert "meshcat replay" in capsys.readouterr().out

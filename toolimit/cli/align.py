@@ -1,7 +1,8 @@
 """``toolimit align``: find scene parameters under which a demonstration reaches the goal.
 
 Writes ``DIR/alignment.json`` (the search's record) and ``DIR/aligned_demo.npz`` (the best
-candidate's aligned motion). An interrupted search (Ctrl-C: exit code 130) leaves ``DIR/alignment_checkpoint.json``; the
+candidate's aligned motion); optionally a rerun recording (``--rerun``) and, in the 3d world, the
+best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (Ctrl-C: exit code 130) leaves ``DIR/alignment_checkpoint.json``; the
 same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
 is still written, with an empty candidate list, and no aligned demo), 2 bad input.
 """
@@ -43,6 +44,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--out", required=True, type=Path, help="output folder")
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
+    parser.add_argument(
+        "--html", type=Path, default=None,
+        help="3d world only: also save the best candidate's replay as a self-contained meshcat page (.html)",
+    )
     parser.add_argument("--no-clean", action="store_true", help="use the demo as loaded, without cleaning")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
@@ -71,6 +76,11 @@ def _check_arguments(args: argparse.Namespace) -> int:
         raise CliError(f"--out: {args.out} exists and is not a folder")
     if args.rerun is not None and args.rerun.suffix != ".rrd":
         raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    if args.html is not None:
+        if args.html.suffix != ".html":
+            raise CliError(f"--html: expected a .html file name, got {args.html}")
+        if args.world != "3d":
+            raise CliError(f"--html: the meshcat replay draws the 3d worlds, not the {args.world} world")
     return workers
 
 
@@ -109,6 +119,10 @@ def run(args: argparse.Namespace) -> int:
         written = save_alignment_recording(result, args.rerun)
         print(f"rerun recording: {args.rerun}" if written else "rerun recording skipped (RERUN=off)")
     best = result.best
+    if args.html is not None and best is not None:
+        from toolimit.viz.meshcat_alignment import save_alignment_html
+
+        print(f"meshcat replay of the best candidate: {save_alignment_html(result, args.html)}")
     if best is None:
         print(
             f"no candidate: no sample earned a goal reward within {args.samples} samples; "
