@@ -1,1 +1,6 @@
-"""Robot models by name (Pinocchio), each carrying a tool frame."""
+"""Robot models by name (Pinocchio), each carrying a tool frame, on a planar mobile base."""
+
+from toolimit.robots.model import BASE_COORDINATES, RobotModel
+from toolimit.robots.registry import ROBOTS, make_robot
+
+__all__ = ["BASE_COORDINATES", "ROBOTS", "RobotModel", "make_robot"]

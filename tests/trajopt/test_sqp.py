@@ -1,0 +1,85 @@
+"""The SQP solver: recovers reachable trajectories, keeps hard limits exactly, stops when J stalls."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from toolimit.trajopt import SqpOptions, TrackingProblem, TrackingWeights, solve_sqp
+from toolimit.trajopt.sqp import project_to_limits
+from trajopt_helpers import FPS, reachable_path, targets_of
+
+# a tiny velocity weight: the exact path is then (nearly) optimal
+PRECISE = TrackingWeights(position=1.0, rotation=0.5, velocity=1e-7)
+
+
+@pytest.mark.parametrize("robot_name", ["planar3", "panda"])
+def test_recovers_a_reachable_trajectory_and_its_base(robot_name, request):
+    robot = request.getfixturevalue(robot_name)
+    path = reachable_path(robot, 30)
+    true_base = np.array([0.4, -0.3, 0.5]) * robot.base_dofs
+    targets = targets_of(robot, path, true_base)
+    problem = TrackingProblem(robot, targets, 1 / FPS, q_start=path[0], weights=PRECISE)
+    guess = true_base + np.array([0.08, -0.05, 0.1]) * robot.base_dofs
+    outcome = solve_sqp(problem, guess, SqpOptions(osqp_eps=1e-6))
+    positions, _ = robot.tool_poses(outcome.q[1:], outcome.base)
+    errors = np.linalg.norm(positions - targets.positions, axis=1)
+    # base + arm are redundant for the pose (4 DoF for planar3's 3, 10 for panda's 6), so the
+    # base itself need not come back: the tool path must
+    assert outcome.cost < 1e-3 * outcome.cost_history[0]
+    assert np.median(errors) < 1e-3, f"median error {np.median(errors):.2e} m"
+    assert np.max(errors) < 5e-3, f"max error {np.max(errors):.2e} m"
+    assert np.all(np.diff(outcome.cost_history) <= 0), "J must decrease monotonically"
+    np.testing.assert_array_equal(outcome.q[0], path[0])
+
+
+def test_hard_limits_hold_exactly_when_targets_ask_for_more(planar3):
+    """planar3 on a fixed base (a non-redundant arm) and targets from a path that leaves joint 3's
+    range and jumps joint 1: with limits widened the solution follows the path out of the true
+    limits; with the true limits it stays inside exactly (after the projection), limits active."""
+    arm = dataclasses.replace(planar3, base_dofs=np.zeros(3, dtype=bool))
+    steps = 24
+    path = reachable_path(arm, steps, amplitude=0.1)
+    path[:, 2] = np.linspace(arm.q_neutral[2], arm.upper[2] + 0.3, steps + 1)
+    path[12:, 0] += 0.6  # joint 1 jumps: far above its velocity limit
+    targets = targets_of(arm, path, np.zeros(3))
+    options = SqpOptions(max_iterations=30)
+    relaxed = dataclasses.replace(arm, lower=arm.lower - 2.0, upper=arm.upper + 2.0,
+                                  velocity_limit=arm.velocity_limit * 20)
+    relaxed_problem = TrackingProblem(relaxed, targets, 1 / FPS, q_start=path[0], weights=PRECISE)
+    loose = solve_sqp(relaxed_problem, np.zeros(3), options)
+    loose_v = np.diff(loose.q, axis=0) * FPS
+    assert np.any(loose.q > arm.upper + 0.1) and np.any(np.abs(loose_v) > arm.velocity_limit * 1.5)
+
+    outcome = solve_sqp(TrackingProblem(arm, targets, 1 / FPS, q_start=path[0], weights=PRECISE), np.zeros(3), options)
+    velocities = np.diff(outcome.q, axis=0) * FPS
+    assert np.all(outcome.q >= arm.lower) and np.all(outcome.q <= arm.upper)
+    assert np.all(np.abs(velocities) <= arm.velocity_limit * (1 + 1e-12))
+    assert outcome.q[:, 2].max() == pytest.approx(arm.upper[2], abs=1e-4), "joint 3's limit should be active"
+    assert np.max(np.abs(velocities[:, 0]) / arm.velocity_limit[0]) == pytest.approx(1.0, abs=1e-4)
+
+
+def test_projection_satisfies_both_limits():
+    rng = np.random.default_rng(0)
+    lower, upper, vlim, dt = -np.ones(4), np.ones(4), np.full(4, 2.0), 0.1
+    q = rng.uniform(-3, 3, size=(50, 4))
+    q[0] = 0.0
+    projected = project_to_limits(q, dt, lower, upper, vlim)
+    assert np.all(projected >= lower) and np.all(projected <= upper)
+    assert np.all(np.abs(np.diff(projected, axis=0)) <= vlim * dt + 1e-15)
+    inside = np.cumsum(np.full((5, 4), 0.1), axis=0) - 0.1  # a feasible path is unchanged
+    np.testing.assert_allclose(project_to_limits(inside, dt, lower, upper, vlim), inside)
+
+
+def test_iteration_budget_and_bad_guess(planar3):
+    path = reachable_path(planar3, 10)
+    problem = TrackingProblem(planar3, targets_of(planar3, path, np.zeros(3)), 1 / FPS, q_start=path[0])
+    outcome = solve_sqp(problem, np.array([0.3, 0.0, 0.0]), SqpOptions(max_iterations=2))
+    assert outcome.iterations <= 2 and not outcome.converged
+    assert outcome.base[1] == 0.0 and outcome.base[2] == 0.0, "planar3's base moves along x only"
+    with pytest.raises(ValueError, match="base guess"):
+        solve_sqp(problem, np.array([0.0, np.nan, 0.0]))
+    with pytest.raises(ValueError, match="max_iterations"):
+        SqpOptions(max_iterations=-1)

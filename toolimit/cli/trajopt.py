@@ -1,0 +1,119 @@
+"""``toolimit trajopt``: optimise a robot's base and joint trajectory to follow a tool motion.
+
+Input: an alignment folder (``DIR/aligned_demo.npz``) or a poses file (``tip_position`` (T, 3),
+``tip_quaternion_wxyz`` (T, 4), ``fps``; toolimit's tool-frame convention). Output:
+``OUT/trajectory.npz`` and ``OUT/trajectory.json`` (see :mod:`toolimit.trajopt.result`).
+Exit codes: 0 done, 2 bad input (nothing written).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from toolimit.cli import CliError
+
+ALIGNED_DEMO_NPZ = "aligned_demo.npz"
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    from toolimit.robots import ROBOTS
+
+    parser = subparsers.add_parser(
+        "trajopt", help="optimise a robot trajectory tracking the aligned tool motion (stage iii)",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument("--robot", required=True, choices=ROBOTS, help="robot model")
+    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--alignment", type=Path, help="alignment output folder (reads aligned_demo.npz)")
+    source.add_argument("--poses", type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
+    parser.add_argument(
+        "--frame", choices=("tool", "original-spade"), default="tool",
+        help="orientation convention of the poses: toolimit's tool frame (default), or the original code's "
+             "spade tip frame of the shared real recordings (converted to the tool frame)",
+    )
+    parser.add_argument("--out", required=True, type=Path, help="output folder")
+    parser.add_argument("--time-scale", default="1", help="slow-down factor (>0) or 'auto' (default: 1)")
+    parser.add_argument("--starts", type=int, default=8, help="base initialisations (default: 8)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random starts beyond 8 (default: 0)")
+    parser.add_argument(
+        "--init", choices=("hold", "rollout", "both"), default="both",
+        help="joint initialisation of every start: the rest pose held, a differential-IK rollout along the "
+             "targets, or both (default: both; the better result is kept)",
+    )
+    parser.add_argument("--velocity-weight", type=float, default=0.01,
+                        help="w_v, weight of the joint velocities (rad/s)^2 against the pose error (default: 0.01)")
+    parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run)
+
+
+def _time_scale(text: str) -> float | None:
+    """None for 'auto', else a positive float."""
+    if text == "auto":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise CliError(f"--time-scale: expected a positive number or 'auto', got {text!r}") from None
+    if not value > 0 or value != value or value == float("inf"):
+        raise CliError(f"--time-scale: must be a positive finite number, got {text!r}")
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from toolimit.robots import make_robot
+    from toolimit.tools import TOOLS
+    from toolimit.trajopt import (TrackingWeights, TrackOptions, choose_time_scale, from_original_spade_tip,
+                                  load_pose_targets, track)
+
+    if args.tool not in TOOLS:
+        raise CliError(f"--tool: unknown tool {args.tool!r}; choose one of {', '.join(sorted(TOOLS))}")
+    if args.starts <= 0:
+        raise CliError(f"--starts: must be a positive integer, got {args.starts}")
+    if args.seed < 0:
+        raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
+    scale = _time_scale(args.time_scale)
+    if not (args.velocity_weight >= 0 and args.velocity_weight < float("inf")):
+        raise CliError(f"--velocity-weight: must be a finite number >= 0, got {args.velocity_weight}")
+    if args.out.exists() and not args.out.is_dir():
+        raise CliError(f"--out: {args.out} exists and is not a folder")
+    if args.rerun is not None and args.rerun.suffix != ".rrd":
+        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    if args.alignment is not None:
+        if not args.alignment.is_dir():
+            raise CliError(f"--alignment: no such folder: {args.alignment}")
+        poses_path = args.alignment / ALIGNED_DEMO_NPZ
+        if not poses_path.is_file():
+            raise CliError(f"--alignment: {poses_path} not found (run `toolimit align` first)")
+    else:
+        poses_path = args.poses
+    targets = load_pose_targets(poses_path)
+    if args.frame == "original-spade":
+        targets = from_original_spade_tip(targets)
+
+    robot = make_robot(args.robot, tool=args.tool)
+    rng = np.random.default_rng(args.seed)
+    initialisations = ("hold", "rollout") if args.init == "both" else (args.init,)
+    options = TrackOptions(weights=TrackingWeights(velocity=args.velocity_weight), starts=args.starts,
+                           time_scale=scale or 1.0, initialisations=initialisations, progress=not args.quiet)
+    if scale is None:
+        result = choose_time_scale(robot, targets, options, rng=rng)
+    else:
+        result = track(robot, targets, options, rng=rng)
+    result.save(args.out)
+    if args.rerun is not None:
+        from toolimit.viz.rerun_trajopt import save_trajectory_recording
+
+        save_trajectory_recording(result, robot, args.rerun, targets.positions)
+    summary = result.summary()
+    print(
+        f"{args.robot}: time scale {result.time_scale:g}, J = {result.statistics['cost']:.4f}, "
+        f"position error median {summary['position_error_m']['median'] * 100:.1f} cm, "
+        f"limit violations {result.limit_violations}, velocity violations {result.velocity_violations}; "
+        f"wrote {args.out}"
+    )
+    return 0

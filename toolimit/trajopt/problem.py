@@ -1,0 +1,220 @@
+"""The tracking problem: a robot on a mobile base follows target tool poses with its tool frame.
+
+Decision variables: the base ``b`` (its active coordinates among x, y, yaw; metres, radians) and
+the joint velocities ``v_1..v_T`` (rad/s); ``q_t = q_{t-1} + dt v_t`` with ``q_0`` given. Cost
+
+    J = sum_{t=1..T} [ 1/2 |W log6(P_t^-1 M(b, q_t))|^2 + 1/2 w_v |v_t|^2 ]
+
+with ``M`` the tool frame in the world, ``log6`` Pinocchio's (linear part first; the error in the
+tool's LOCAL frame) and ``W = diag(w_pos I3, w_rot I3)``. Joint position and velocity limits are
+hard constraints, so J equals the benchmark's objective (PROBLEM.md) whenever they hold.
+This module evaluates J and its Gauss-Newton linearisation; :mod:`toolimit.trajopt.sqp` solves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from toolimit.robots import RobotModel
+
+
+@dataclass(frozen=True)
+class TrackingWeights:
+    """Weights of the cost J (see the module docstring).
+
+    Attributes:
+        position: w_pos, on the position part of log6 (metres).
+        rotation: w_rot, on the rotation part of log6 (radians).
+        velocity: w_v, on the joint velocities (rad/s) squared.
+    """
+
+    position: float = 1.0
+    rotation: float = 0.5
+    velocity: float = 0.01
+
+    def __post_init__(self) -> None:
+        for name in ("position", "rotation", "velocity"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise ValueError(f"weight {name} must be finite and >= 0, got {value}")
+
+    @property
+    def pose_diagonal(self) -> np.ndarray:
+        """(6,) diagonal of W."""
+        return np.array([self.position] * 3 + [self.rotation] * 3)
+
+
+@dataclass(frozen=True)
+class PoseTargets:
+    """Target tool-frame poses P_1..P_T in the world frame.
+
+    Attributes:
+        positions: (T, 3) tool-frame origins (tool head), metres.
+        rotations: (T, 3, 3) tool-frame orientations (columns = tool axes in world axes).
+        fps: frame rate of the demonstration, Hz (the time step is time_scale / fps).
+    """
+
+    positions: np.ndarray
+    rotations: np.ndarray
+    fps: float
+
+    def __post_init__(self) -> None:
+        positions = np.asarray(self.positions, dtype=float)
+        rotations = np.asarray(self.rotations, dtype=float)
+        if positions.ndim != 2 or positions.shape[1] != 3 or len(positions) < 1:
+            raise ValueError(f"target positions must have shape (T, 3) with T >= 1, got {positions.shape}")
+        if rotations.shape != (len(positions), 3, 3):
+            raise ValueError(f"target rotations must have shape ({len(positions)}, 3, 3), got {rotations.shape}")
+        if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(rotations))):
+            raise ValueError("target poses contain non-finite values")
+        orthogonality = np.abs(np.swapaxes(rotations, 1, 2) @ rotations - np.eye(3)).max()
+        if orthogonality > 1e-6 or np.any(np.linalg.det(rotations) < 0):
+            raise ValueError(f"target rotations must be proper rotations (max |R^T R - I| = {orthogonality:.2e})")
+        if not (np.isfinite(self.fps) and self.fps > 0):
+            raise ValueError(f"fps must be positive, got {self.fps}")
+        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "rotations", rotations)
+        object.__setattr__(self, "fps", float(self.fps))
+
+    @property
+    def horizon(self) -> int:
+        """T, the number of target poses."""
+        return len(self.positions)
+
+    @classmethod
+    def from_quaternions(cls, positions: np.ndarray, quaternions_wxyz: np.ndarray, fps: float) -> "PoseTargets":
+        """Targets from positions (T, 3) and scalar-first quaternions (T, 4), normalised here."""
+        quaternions_wxyz = np.asarray(quaternions_wxyz, dtype=float)
+        positions = np.asarray(positions, dtype=float)
+        if quaternions_wxyz.ndim != 2 or quaternions_wxyz.shape[1] != 4:
+            raise ValueError(f"tip_quaternion_wxyz must have shape (T, 4), got {quaternions_wxyz.shape}")
+        if len(quaternions_wxyz) != len(positions):
+            raise ValueError(
+                f"tip_quaternion_wxyz has {len(quaternions_wxyz)} rows but tip_position has {len(positions)}"
+            )
+        norms = np.linalg.norm(quaternions_wxyz, axis=1)
+        if not np.all(np.isfinite(norms) & (norms > 1e-9)):
+            raise ValueError("tip_quaternion_wxyz has zero or non-finite rows")
+        w, x, y, z = (quaternions_wxyz / norms[:, None]).T
+        rotations = np.stack(
+            [
+                np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+                np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+                np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+            ],
+            axis=1,
+        )
+        return cls(positions, rotations, fps)
+
+    def rotated_about_tool_z(self, angle: float) -> "PoseTargets":
+        """The same targets with every tool frame turned by ``angle`` (rad) about its own z axis
+        (an equivalent target set for a roll-symmetric tool when angle = pi)."""
+        c, s = np.cos(angle), np.sin(angle)
+        turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        return PoseTargets(self.positions, self.rotations @ turn, self.fps)
+
+
+@dataclass(frozen=True)
+class Linearisation:
+    """Residuals and Jacobians of the pose term along a trajectory.
+
+    Attributes:
+        residuals: (T, 6) W log6(P_t^-1 M(q_t)), metres then radians (weighted).
+        jacobians: (T, 6, 3 + N) d residual / d(base x, y, yaw, q_t), W Jlog6 J_LOCAL.
+    """
+
+    residuals: np.ndarray
+    jacobians: np.ndarray
+
+
+class TrackingProblem:
+    """A robot, its targets and the cost; evaluates J, its terms and its linearisation.
+
+    Args:
+        robot: the robot holding its tool.
+        targets: target poses P_1..P_T.
+        dt: time between targets, seconds.
+        q_start: (N,) joint configuration q_0 (fixed), radians; ``robot.q_neutral`` when None.
+        weights: cost weights.
+    """
+
+    def __init__(self, robot: RobotModel, targets: PoseTargets, dt: float,
+                 q_start: np.ndarray | None = None, weights: TrackingWeights = TrackingWeights()) -> None:
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be positive, got {dt}")
+        q_start = robot.q_neutral if q_start is None else np.asarray(q_start, dtype=float)
+        robot.check_configuration(q_start)
+        self.robot = robot
+        self.targets = targets
+        self.dt = float(dt)
+        self.q_start = q_start.copy()
+        self.weights = weights
+        self._w = weights.pose_diagonal
+        self._model = robot.full_model
+        self._data = robot.full_model.createData()
+        self._frame = robot.full_tool_frame_id
+        self._targets_inverse = [pin.SE3(r, p).inverse() for p, r in zip(targets.positions, targets.rotations)]
+
+    @property
+    def horizon(self) -> int:
+        return self.targets.horizon
+
+    @property
+    def n_joints(self) -> int:
+        return self.robot.n_joints
+
+    def velocities(self, q: np.ndarray) -> np.ndarray:
+        """(T, N) joint velocities (rad/s) of a trajectory q (T+1, N)."""
+        return np.diff(q, axis=0) / self.dt
+
+    def pose_residuals(self, base: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """(T, 6) weighted pose residuals for base (3,) and trajectory q (T+1, N) (q_0 unused)."""
+        model, data, frame = self._model, self._data, self._frame
+        q_full = np.empty(3 + self.n_joints)
+        q_full[:3] = base
+        residuals = np.empty((self.horizon, 6))
+        for t in range(self.horizon):
+            q_full[3:] = q[t + 1]
+            pin.forwardKinematics(model, data, q_full)
+            placement = pin.updateFramePlacement(model, data, frame)
+            residuals[t] = pin.log6(self._targets_inverse[t] * placement).vector
+        return residuals * self._w
+
+    def linearise(self, base: np.ndarray, q: np.ndarray) -> Linearisation:
+        """Residuals and Jacobians (see :class:`Linearisation`) at base (3,), trajectory (T+1, N)."""
+        model, data, frame = self._model, self._data, self._frame
+        local = pin.ReferenceFrame.LOCAL
+        q_full = np.empty(3 + self.n_joints)
+        q_full[:3] = base
+        residuals = np.empty((self.horizon, 6))
+        jacobians = np.empty((self.horizon, 6, 3 + self.n_joints))
+        for t in range(self.horizon):
+            q_full[3:] = q[t + 1]
+            pin.computeJointJacobians(model, data, q_full)
+            error = self._targets_inverse[t] * pin.updateFramePlacement(model, data, frame)
+            frame_jacobian = pin.getFrameJacobian(model, data, frame, local)
+            residuals[t] = pin.log6(error).vector
+            jacobians[t] = pin.Jlog6(error) @ frame_jacobian
+        return Linearisation(residuals * self._w, jacobians * self._w[None, :, None])
+
+    def step_linearisation(self, base: np.ndarray, q_t: np.ndarray, t: int) -> tuple[np.ndarray, np.ndarray]:
+        """Residual (6,) and Jacobian (6, 3 + N) of target t (1..T) at base (3,) and joints q_t (N,)."""
+        q_full = np.concatenate([base, q_t])
+        model, data, frame = self._model, self._data, self._frame
+        pin.computeJointJacobians(model, data, q_full)
+        error = self._targets_inverse[t - 1] * pin.updateFramePlacement(model, data, frame)
+        jacobian = pin.Jlog6(error) @ pin.getFrameJacobian(model, data, frame, pin.ReferenceFrame.LOCAL)
+        return self._w * pin.log6(error).vector, self._w[:, None] * jacobian
+
+    def cost_terms(self, base: np.ndarray, q: np.ndarray) -> dict[str, float]:
+        """J's terms ``pose`` and ``velocity`` and their sum ``total`` for base (3,), q (T+1, N)."""
+        pose = 0.5 * float(np.sum(self.pose_residuals(base, q) ** 2))
+        velocity = 0.5 * self.weights.velocity * float(np.sum(self.velocities(q) ** 2))
+        return {"pose": pose, "velocity": velocity, "total": pose + velocity}
+
+    def cost(self, base: np.ndarray, q: np.ndarray) -> float:
+        """J at base (3,) and trajectory q (T+1, N)."""
+        return self.cost_terms(base, q)["total"]

@@ -1,0 +1,149 @@
+"""The result of trajectory optimisation: joint trajectory, base, tracking errors, limits, statistics.
+
+Saved as ``DIR/trajectory.npz`` (keys ``q`` (T+1, N) and ``v`` (T, N) for the robot's own joints,
+radians and rad/s; ``base`` (3,) x, y (m), yaw (rad); ``joint_names`` (N,); ``dt`` (s)) and
+``DIR/trajectory.json`` (robot, tool, errors, limit margins, velocity ratios, solver statistics,
+time scale). Both files are written to temporary names and renamed together.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from toolimit.artifacts import atomic_path
+
+TRAJECTORY_NPZ = "trajectory.npz"
+TRAJECTORY_JSON = "trajectory.json"
+
+
+@dataclass(frozen=True)
+class TrajectoryResult:
+    """An optimised robot trajectory and how well it tracks its targets.
+
+    Attributes:
+        robot: robot name (``make_robot``); tool: tool name.
+        joint_names: (N,) arm joint names.
+        q: (T+1, N) joint positions, radians; q[0] is the start configuration.
+        v: (T, N) joint velocities, rad/s; q[t] = q[t-1] + dt v[t-1].
+        base: (3,) base x, y (m) and yaw (rad) in the world frame.
+        dt: time step, seconds (= time_scale / demonstration fps).
+        time_scale: slow-down factor of the demonstration (1 = real time).
+        position_error: (T,) |p(q_t) - p_t|, metres, t = 1..T.
+        rotation_error: (T,) |log3(R_t^T R(q_t))|, radians.
+        limit_margin: (T+1, N) distance of each joint to its nearest position limit, radians
+            (negative = violation).
+        velocity_ratio: (T, N) |v| / velocity limit (above 1 = violation).
+        statistics: solver statistics (cost, cost terms, iterations, converged, wall time, starts).
+    """
+
+    robot: str
+    tool: str
+    joint_names: tuple[str, ...]
+    q: np.ndarray
+    v: np.ndarray
+    base: np.ndarray
+    dt: float
+    time_scale: float
+    position_error: np.ndarray
+    rotation_error: np.ndarray
+    limit_margin: np.ndarray
+    velocity_ratio: np.ndarray
+    statistics: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def horizon(self) -> int:
+        """T, the number of steps."""
+        return len(self.v)
+
+    @property
+    def limit_violations(self) -> int:
+        """Number of (step, joint) entries outside the position limits."""
+        return int(np.sum(self.limit_margin < 0))
+
+    @property
+    def velocity_violations(self) -> int:
+        """Number of (step, joint) velocities above their limits."""
+        return int(np.sum(self.velocity_ratio > 1.0 + 1e-9))
+
+    def summary(self) -> dict[str, Any]:
+        """Scalar figures: errors (m, rad), margins, velocity ratio, statistics."""
+        return {
+            "robot": self.robot,
+            "tool": self.tool,
+            "horizon": self.horizon,
+            "dt": self.dt,
+            "time_scale": self.time_scale,
+            "base": {"x": float(self.base[0]), "y": float(self.base[1]), "yaw": float(self.base[2])},
+            "position_error_m": _stats(self.position_error),
+            "rotation_error_rad": _stats(self.rotation_error),
+            "steps_position_error_over_1cm": int(np.sum(self.position_error > 0.01)),
+            "min_limit_margin_rad": float(self.limit_margin.min()),
+            "limit_violations": self.limit_violations,
+            "max_velocity_ratio": float(self.velocity_ratio.max()),
+            "velocity_violations": self.velocity_violations,
+            "statistics": self.statistics,
+        }
+
+    def save(self, directory: str | os.PathLike[str]) -> Path:
+        """Write DIR/trajectory.npz and DIR/trajectory.json (both or neither); returns DIR."""
+        directory = Path(directory)
+        document = self.summary() | {
+            "joint_names": list(self.joint_names),
+            "position_error": self.position_error,
+            "rotation_error": self.rotation_error,
+            "limit_margin": self.limit_margin,
+            "velocity_ratio": self.velocity_ratio,
+        }
+        text = json.dumps(document, indent=2, default=_to_json) + "\n"
+        with atomic_path(directory / TRAJECTORY_NPZ) as npz_tmp, atomic_path(directory / TRAJECTORY_JSON) as json_tmp:
+            with open(npz_tmp, "wb") as handle:
+                np.savez(handle, q=self.q, v=self.v, base=self.base, joint_names=np.array(self.joint_names),
+                         dt=np.float64(self.dt))
+            json_tmp.write_text(text)
+        return directory
+
+    @classmethod
+    def load(cls, directory: str | os.PathLike[str]) -> "TrajectoryResult":
+        """Read a result written by :meth:`save`; a clear error for a missing or malformed file."""
+        directory = Path(directory)
+        npz_path, json_path = directory / TRAJECTORY_NPZ, directory / TRAJECTORY_JSON
+        for path in (npz_path, json_path):
+            if not path.is_file():
+                raise FileNotFoundError(f"{path}: no such file (expected a trajopt output directory)")
+        with np.load(npz_path) as arrays:
+            missing = {"q", "v", "base", "joint_names", "dt"} - set(arrays.files)
+            if missing:
+                raise ValueError(f"{npz_path}: missing keys {sorted(missing)}")
+            q, v, base = arrays["q"], arrays["v"], arrays["base"]
+            joint_names, dt = tuple(str(n) for n in arrays["joint_names"]), float(arrays["dt"])
+        if q.ndim != 2 or v.shape != (len(q) - 1, q.shape[1]) or base.shape != (3,) or len(joint_names) != q.shape[1]:
+            raise ValueError(f"{npz_path}: inconsistent shapes q {q.shape}, v {v.shape}, base {base.shape}, "
+                             f"joint_names {len(joint_names)}")
+        document = json.loads(json_path.read_text())
+        return cls(
+            robot=document["robot"], tool=document["tool"], joint_names=joint_names, q=q, v=v, base=base, dt=dt,
+            time_scale=float(document["time_scale"]),
+            position_error=np.asarray(document["position_error"], dtype=float),
+            rotation_error=np.asarray(document["rotation_error"], dtype=float),
+            limit_margin=np.asarray(document["limit_margin"], dtype=float).reshape(q.shape),
+            velocity_ratio=np.asarray(document["velocity_ratio"], dtype=float).reshape(v.shape),
+            statistics=document["statistics"],
+        )
+
+
+def _stats(values: np.ndarray) -> dict[str, float]:
+    return {"mean": float(np.mean(values)), "median": float(np.median(values)), "max": float(np.max(values))}
+
+
+def _to_json(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")

@@ -1,0 +1,56 @@
+"""Reading target tool poses from files (``--poses FILE.npz``, ``DIR/aligned_demo.npz``).
+
+Both formats hold ``tip_position`` (T, 3) metres, ``tip_quaternion_wxyz`` (T, 4) scalar first and
+``fps``, in the world frame and toolimit's tool-frame convention (:mod:`toolimit.tools`). The
+shared real recordings use the original code's spade tip frame instead; see
+:func:`from_original_spade_tip`.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from toolimit.trajopt.problem import PoseTargets
+
+#: Handle end in the original spade tip frame (shared data README): p_handle = p_tip - R (0, -0.161, 0.369).
+_ORIGINAL_SPADE_TIP_TO_HANDLE = -np.array([0.0, -0.161, 0.369])
+
+
+def load_pose_targets(path: str | os.PathLike[str]) -> PoseTargets:
+    """Targets from an ``.npz`` with ``tip_position``, ``tip_quaternion_wxyz`` and ``fps``."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+    try:
+        arrays = np.load(path)
+    except (ValueError, OSError) as error:
+        raise ValueError(f"{path}: not a readable .npz file ({error})") from None
+    with arrays:
+        missing = [key for key in ("tip_position", "tip_quaternion_wxyz", "fps") if key not in arrays.files]
+        if missing:
+            raise ValueError(f"{path}: missing keys {missing} (needs tip_position, tip_quaternion_wxyz, fps)")
+        positions = np.asarray(arrays["tip_position"], dtype=float)
+        quaternions = np.asarray(arrays["tip_quaternion_wxyz"], dtype=float)
+        fps = float(np.asarray(arrays["fps"]).reshape(()))
+    if positions.ndim != 2 or positions.shape[1] != 3:
+        raise ValueError(f"{path}: tip_position must have shape (T, 3), got {positions.shape}")
+    try:
+        return PoseTargets.from_quaternions(positions, quaternions, fps)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
+
+
+def from_original_spade_tip(targets: PoseTargets) -> PoseTargets:
+    """Convert poses of the original code's spade tip frame into toolimit's tool frame.
+
+    The origin (blade tip = tool head) is kept; z becomes the unit vector from the tip to the handle
+    end (tip frame coordinates (0, 0.161, -0.369) / 0.4026), x stays the tip frame's x (the blade
+    normal, orthogonal to that axis), y = z x x.
+    """
+    z = _ORIGINAL_SPADE_TIP_TO_HANDLE / np.linalg.norm(_ORIGINAL_SPADE_TIP_TO_HANDLE)
+    x = np.array([1.0, 0.0, 0.0])
+    offset = np.column_stack([x, np.cross(z, x), z])
+    return PoseTargets(targets.positions, targets.rotations @ offset, targets.fps)
