@@ -19,7 +19,11 @@ class CliError(Exception):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="toolimit", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="toolimit",
+        description="A robot learns to use a tool from one video demonstration: "
+        "demo (i) -> align (ii) -> trajopt (iii) -> export.",
+    )
     subparsers = parser.add_subparsers(dest="command", required=True)
     for module_name in COMMANDS:
         try:

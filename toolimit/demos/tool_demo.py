@@ -20,7 +20,7 @@ class DemoError(ValueError):
     """A demonstration is malformed: the message names the field, the shape or the value."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ToolDemo:
     """Head and handle-end trajectories of a tool.
 
@@ -68,6 +68,19 @@ class ToolDemo:
         object.__setattr__(self, "head", head)
         object.__setattr__(self, "handle", handle)
         object.__setattr__(self, "fps", float(self.fps))
+
+    def __eq__(self, other: object) -> bool:
+        """Same tool, fps and identical head and handle arrays (``source`` is not compared)."""
+        if not isinstance(other, ToolDemo):
+            return NotImplemented
+        return (
+            self.tool == other.tool
+            and self.fps == other.fps
+            and np.array_equal(self.head, other.head)
+            and np.array_equal(self.handle, other.handle)
+        )
+
+    __hash__ = None  # equality is by array value, so demos are not hashable
 
     # --- derived quantities -------------------------------------------------------------------
     @property

@@ -1,0 +1,87 @@
+"""Grader of exercise 01: velocity keypoints, checked against ``toolimit.align.keypoints``.
+
+Each test draws demonstrations from a seeded generator, so a failure is reproducible: the message
+names the seed, the frames you missed or added, and why they are (not) keypoints.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from toolimit.align.keypoints import velocity_keypoints as reference_keypoints
+from toolimit.demos import ToolDemo
+
+MODULE = "ex01_velocity_keypoints"
+SEEDS = range(8)
+
+
+def random_demo(seed: int) -> ToolDemo:
+    """A smooth random tool motion (sum of sines plus a little noise), 20 to 300 frames."""
+    rng = np.random.default_rng(seed)
+    n_frames = int(rng.integers(20, 301))
+    fps = float(rng.choice([24.0, 30.0]))
+    t = np.arange(n_frames)[:, None] / fps
+    frequencies = rng.uniform(0.2, 2.0, size=(3, 3))
+    amplitudes = rng.uniform(0.05, 0.5, size=(3, 3))
+    phases = rng.uniform(0, 2 * np.pi, size=(3, 3))
+    head = sum(amplitudes[k] * np.sin(2 * np.pi * frequencies[k] * t + phases[k]) for k in range(3))
+    head = head + rng.normal(scale=0.003, size=head.shape) + np.array([0.0, 0.0, 0.5])
+    tilt = 0.5 * np.sin(2 * np.pi * rng.uniform(0.1, 1.0) * t[:, 0])
+    axis = np.stack([np.sin(tilt), np.zeros_like(tilt), np.cos(tilt)], axis=1)
+    return ToolDemo(head=head, handle=head + 0.4 * axis, fps=fps, tool="spade", source=f"grader seed {seed}")
+
+
+def describe_frames(frames: np.ndarray, speed: np.ndarray, fraction: float) -> str:
+    """One line per frame: its speed and whether it is a local maximum / minimum."""
+    top, bottom = np.quantile(speed, 1 - fraction), np.quantile(speed, fraction)
+    lines = []
+    for t in frames[:8]:
+        if t in (0, len(speed) - 1):
+            kind = "an end frame"
+        elif speed[t] > speed[t - 1] and speed[t] > speed[t + 1]:
+            kind = f"a local maximum (top threshold {top:.4f} m/s)"
+        elif speed[t] < speed[t - 1] and speed[t] < speed[t + 1]:
+            kind = f"a local minimum (bottom threshold {bottom:.4f} m/s)"
+        else:
+            kind = "not a local extremum"
+        lines.append(f"  frame {t}: speed {speed[t]:.4f} m/s, {kind}")
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ex01_output_is_sorted_unique_int_frames(submission, seed):
+    demo = random_demo(seed)
+    frames = np.asarray(submission(MODULE).velocity_keypoints(demo, 0.05))
+    assert frames.ndim == 1, f"expected a 1-D array of frame indices, got shape {frames.shape}"
+    assert np.issubdtype(frames.dtype, np.integer), f"expected integer frame indices, got dtype {frames.dtype}"
+    assert np.all(np.diff(frames) > 0), f"frames must be increasing and unique, got {frames.tolist()}"
+    assert frames.min() >= 0 and frames.max() < demo.n_frames, (
+        f"frames must lie in 0..{demo.n_frames - 1}, got {frames.tolist()}"
+    )
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ex01_first_and_last_frame_are_keypoints(submission, seed):
+    demo = random_demo(seed)
+    frames = np.asarray(submission(MODULE).velocity_keypoints(demo, 0.05)).tolist()
+    assert 0 in frames, f"seed {seed}: the first frame (0) is always a keypoint; you returned {frames}"
+    last = demo.n_frames - 1
+    assert last in frames, f"seed {seed}: the last frame ({last}) is always a keypoint; you returned {frames}"
+
+
+@pytest.mark.parametrize("fraction", [0.05, 0.1, 0.3])
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ex01_keypoints_match_reference(submission, seed, fraction):
+    demo = random_demo(seed)
+    expected = reference_keypoints(demo, fraction)
+    got = np.asarray(submission(MODULE).velocity_keypoints(demo, fraction)).astype(int)
+    speed = demo.speed()
+    missing = np.setdiff1d(expected, got)
+    extra = np.setdiff1d(got, expected)
+    message = [f"seed {seed}, fraction {fraction}, {demo.n_frames} frames:"]
+    if missing.size:
+        message.append(f"these keypoints are missing from your answer:\n{describe_frames(missing, speed, fraction)}")
+    if extra.size:
+        message.append(f"these frames are not keypoints:\n{describe_frames(extra, speed, fraction)}")
+    assert not missing.size and not extra.size, "\n".join(message)
