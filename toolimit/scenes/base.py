@@ -110,3 +110,31 @@ class Scene(Protocol):
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Arrays describing the current state of instance 0 for views (element positions, ...)."""
+
+
+# --- helpers for scene implementations -----------------------------------------------------------
+def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:
+    """Validate a ``reset`` call before any work; returns B as an int.
+
+    Raises InvalidSceneParameters with the scene's own reason, or ValueError for a batch size < 1.
+    """
+    reason = scene.invalid_reason(params)
+    if reason is not None:
+        raise InvalidSceneParameters(reason)
+    if int(batch_size) < 1:
+        raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+    return int(batch_size)
+
+
+def require_positive(**values: float) -> None:
+    """Raise ValueError naming the first argument that is not a positive finite number."""
+    for name, value in values.items():
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a positive number, got {value!r}")
+
+
+def require_counts(**counts: int) -> None:
+    """Raise ValueError naming the first count (sub-steps, stalks, ...) below 1."""
+    for name, count in counts.items():
+        if int(count) < 1:
+            raise ValueError(f"{name} must be >= 1, got {count!r}")

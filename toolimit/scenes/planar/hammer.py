@@ -35,7 +35,12 @@ from __future__ import annotations
 import numpy as np
 import pymunk
 
-from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.base import (
+    CONTROL_FPS,
+    ParameterSpec,
+    SceneParams,
+    check_reset,
+)
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
 
@@ -135,11 +140,7 @@ class PlanarHammerScene:
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` identical instances (this scene has no per-instance randomness)."""
-        reason = self.invalid_reason(params)
-        if reason is not None:
-            raise InvalidSceneParameters(reason)
-        if batch_size < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        batch_size = check_reset(self, params, batch_size)
         nail = np.asarray(params["nail_position"], dtype=float)
         self.nail_start = np.array([nail[0], nail[2]])  # plane point of the head top, m
         self._spaces, self._nails = [], []

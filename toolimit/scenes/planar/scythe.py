@@ -29,7 +29,12 @@ from __future__ import annotations
 import numpy as np
 import pymunk
 
-from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.base import (
+    CONTROL_FPS,
+    ParameterSpec,
+    SceneParams,
+    check_reset,
+)
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
 
@@ -104,11 +109,7 @@ class PlanarScytheScene:
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` instances, each with its own stalk placement drawn from ``rng``."""
-        reason = self.invalid_reason(params)
-        if reason is not None:
-            raise InvalidSceneParameters(reason)
-        if batch_size < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        batch_size = check_reset(self, params, batch_size)
         self.grass_centre = np.asarray(params["grass_position"], dtype=float)[:2].copy()
         # Instance by instance, so instance b's stalks do not depend on the batch size.
         uniform = np.array([rng.uniform(0.0, 1.0, (2, self.stalk_count)) for _ in range(batch_size)])  # (B, 2, M)

@@ -40,7 +40,12 @@ import numpy as np
 import pymunk
 import pymunk.batch
 
-from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.base import (
+    CONTROL_FPS,
+    ParameterSpec,
+    SceneParams,
+    check_reset,
+)
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.scenes.planar.sand_pile import (
     SandMaterial,
@@ -170,11 +175,7 @@ class PlanarSpadeScene:
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` instances; each jitters the settled pile with ``rng``."""
-        reason = self.invalid_reason(params)
-        if reason is not None:
-            raise InvalidSceneParameters(reason)
-        if batch_size < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        batch_size = check_reset(self, params, batch_size)
         self.sand_x = float(np.asarray(params["sand_position"], dtype=float)[0])
         self.goal_x = float(np.asarray(params["goal_position"], dtype=float)[0])
         dt = self.control_dt / self.substeps

@@ -24,7 +24,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.base import (
+    CONTROL_FPS,
+    ParameterSpec,
+    SceneParams,
+    check_reset,
+    require_counts,
+    require_positive,
+)
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import batched_pose, interpolate_poses
 from toolimit.tools import ToolPose
@@ -90,7 +97,7 @@ class SpatialHammerScene:
         substeps: int = 10,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
-        positive = dict(
+        require_positive(
             protrusion=protrusion,
             guide_travel=guide_travel,
             plate_half_size=plate_half_size,
@@ -103,15 +110,11 @@ class SpatialHammerScene:
             success_window=success_window,
             control_dt=control_dt,
         )
-        for name, value in positive.items():
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
         if protrusion > guide_travel:
             raise ValueError(f"protrusion ({protrusion} m) exceeds the guide travel ({guide_travel} m)")
         if not 0.0 <= restitution <= 1.0:
             raise ValueError(f"restitution must be in [0, 1], got {restitution!r}")
-        if int(substeps) < 1:
-            raise ValueError(f"substeps must be >= 1, got {substeps!r}")
+        require_counts(substeps=substeps)
         self.protrusion = float(protrusion)
         self.guide_travel = float(guide_travel)
         self.plate_half_size = float(plate_half_size)
@@ -169,13 +172,9 @@ class SpatialHammerScene:
 
         The scene has no randomness; ``rng`` is accepted for the protocol.
         """
-        reason = self.invalid_reason(params)
-        if reason is not None:
-            raise InvalidSceneParameters(reason)
-        if int(batch_size) < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+        batch_size = check_reset(self, params, batch_size)
         position = np.asarray(params["nail_position"], dtype=float)
-        self.batch_size = int(batch_size)
+        self.batch_size = batch_size
         self._nail_xy = position[:2].copy()
         self._start_top = float(position[2])
         b = self.batch_size

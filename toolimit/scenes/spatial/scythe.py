@@ -21,11 +21,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
+from toolimit.scenes.base import (
+    CONTROL_FPS,
+    ParameterSpec,
+    SceneParams,
+    check_reset,
+    require_counts,
+    require_positive,
+)
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import batched_pose, interpolate_poses
 from toolimit.tools import ToolPose, rotation_z
+
 
 def _cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """z component of the cross product of x-y vectors (..., 2)."""
@@ -108,7 +116,7 @@ class SpatialScytheScene:
         substeps: int = 10,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
-        positive = dict(
+        require_positive(
             patch_length=patch_size[0],
             patch_width=patch_size[1],
             stalk_width=stalk_width,
@@ -118,13 +126,7 @@ class SpatialScytheScene:
             success_window=success_window,
             control_dt=control_dt,
         )
-        for name, value in positive.items():
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
-        if int(n_stalks) < 1:
-            raise ValueError(f"n_stalks must be >= 1, got {n_stalks!r}")
-        if int(substeps) < 1:
-            raise ValueError(f"substeps must be >= 1, got {substeps!r}")
+        require_counts(n_stalks=n_stalks, substeps=substeps)
         self.n_stalks = int(n_stalks)
         self.patch_size = (float(patch_size[0]), float(patch_size[1]))
         self.stalk_width = float(stalk_width)
@@ -176,12 +178,8 @@ class SpatialScytheScene:
 
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Scatter B patches of stalks (each from ``rng``); the scythe is absent until ``step``."""
-        reason = self.invalid_reason(params)
-        if reason is not None:
-            raise InvalidSceneParameters(reason)
-        if int(batch_size) < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
-        self.batch_size = b = int(batch_size)
+        batch_size = check_reset(self, params, batch_size)
+        self.batch_size = b = batch_size
         self.grass_position = np.asarray(params["grass_position"], dtype=float).copy()
         self.grass_yaw = float(np.asarray(params["grass_yaw"], dtype=float))
         half = np.array(self.patch_size) / 2

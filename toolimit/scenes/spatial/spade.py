@@ -33,8 +33,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, ParameterSpec, SceneParams
-from toolimit.scenes.spatial.particles import GranularMaterial, ParticleWorld, StaticBoxes
+from toolimit.scenes.base import (
+    CONTROL_FPS,
+    ParameterSpec,
+    SceneParams,
+    check_reset,
+    require_counts,
+    require_positive,
+)
+from toolimit.scenes.spatial.particles import (
+    GranularMaterial,
+    ParticleWorld,
+    StaticBoxes,
+)
 from toolimit.scenes.spatial.tool_geometry import SPADE_RIM_HEIGHT, tool_shapes
 from toolimit.scenes.spatial.tool_motion import batched_pose
 from toolimit.tools import ToolPose, rotation_z, tool_spec
@@ -174,10 +185,8 @@ class SpatialSpadeScene:
     ) -> None:
         if not 30 <= int(n_spheres) <= 100:
             raise ValueError(f"n_spheres must be in 30..100, got {n_spheres!r}")
-        if int(substeps) < 1:
-            raise ValueError(f"substeps must be >= 1, got {substeps!r}")
-        if not (np.isfinite(control_dt) and control_dt > 0):
-            raise ValueError(f"control_dt must be a positive number, got {control_dt!r}")
+        require_counts(substeps=substeps)
+        require_positive(control_dt=control_dt)
         self.n_spheres = int(n_spheres)
         self.substeps = int(substeps)
         self.material = material
@@ -233,12 +242,8 @@ class SpatialSpadeScene:
     # --------------------------------------------------------------------------------- lifecycle
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """B instances: walls at ``params``, each pile jittered by ``rng`` then settled; no spade yet."""
-        reason = self.invalid_reason(params)
-        if reason is not None:
-            raise InvalidSceneParameters(reason)
-        if int(batch_size) < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
-        b = self.batch_size = int(batch_size)
+        batch_size = check_reset(self, params, batch_size)
+        b = self.batch_size = batch_size
         self.sand_position = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
         self.sand_yaw = float(params["sand_yaw"])
         self.goal_position = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
