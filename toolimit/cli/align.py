@@ -48,6 +48,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--html", type=Path, default=None,
         help="3d world only: also save the best candidate's replay as a self-contained meshcat page (.html)",
     )
+    parser.add_argument(
+        "--z-offset-std", type=float, default=None,
+        help="spread of the sampled vertical offset p_z, m (default 0.1; the paper's 0.5 suits recordings "
+        "whose heights are not measured from the ground)",
+    )
     parser.add_argument("--no-clean", action="store_true", help="use the demo as loaded, without cleaning")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
@@ -65,6 +70,8 @@ def _check_arguments(args: argparse.Namespace) -> int:
     for name in ("samples", "candidates"):
         if getattr(args, name) <= 0:
             raise CliError(f"--{name}: must be a positive integer, got {getattr(args, name)}")
+    if args.z_offset_std is not None and not args.z_offset_std > 0:
+        raise CliError(f"--z-offset-std: must be a positive number of metres, got {args.z_offset_std}")
     if args.seed < 0:
         raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
     workers = args.workers if args.workers is not None else max(1, min(4, os.cpu_count() or 1))
@@ -95,7 +102,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_clean:
         demo, report = clean_demo(demo)
         print(f"cleaned demo: {len(report.replaced_frames)} of {demo.n_frames} frames replaced")
-    config = AlignmentConfig(samples=args.samples, candidates=args.candidates)
+    settings = {} if args.z_offset_std is None else {"z_offset_std": args.z_offset_std}
+    config = AlignmentConfig(samples=args.samples, candidates=args.candidates, **settings)
     checkpoint = args.out / CHECKPOINT_JSON
     if checkpoint.is_file():
         print(f"found {checkpoint}: the search resumes from it if it was made with the same settings")
