@@ -111,3 +111,28 @@ def test_drawn_sample_places_ground_elements_near_the_transformed_keypoints():
         assert np.min(np.abs(head[:, 0] - target[0])) < 4 * 0.05
         assert 0.0 <= sample.params["radius"] <= 0.1
         assert sample.rolls.shape == (len(keypoints) - 1,) and np.all(np.abs(sample.rolls) <= np.pi)
+
+
+def test_planar_rolls_face_one_side_of_the_plane_and_use_the_same_draws():
+    """In the vertical x-z plane the whole motion takes roll 0 or pi (the blade's x stays in the
+    plane, on one face); the generator is used exactly as in 3D, so every other value is unchanged."""
+    from toolimit.align.config import AlignmentConfig
+    from toolimit.align.sampler import apply_alignment_sample, draw_alignment_sample
+    from toolimit.demos import ToolDemo
+
+    t = np.linspace(0.0, 1.0, 48)
+    head = np.column_stack([t, np.zeros_like(t), 0.1 + 0.3 * np.sin(np.pi * t) ** 2])
+    demo = ToolDemo(head=head, handle=head + [0.1, 0.0, 0.38], fps=24, tool="spade")
+    keypoints = np.array([0, 12, 24, 36, 47])
+    config = AlignmentConfig()
+    for seed in range(20):
+        draws = [
+            draw_alignment_sample(demo, keypoints, (), config, np.eye(3) * 0.01, 0.05, np.random.default_rng(seed), plane=plane)
+            for plane in (None, "xz")
+        ]
+        free, planar = draws
+        assert set(np.round(planar.rolls, 12)) <= {0.0, round(np.pi, 12)}
+        assert np.all(planar.rolls == (0.0 if abs(free.rolls[0]) < np.pi / 2 else np.pi))
+        assert (planar.scale, planar.z_offset) == (free.scale, free.z_offset)
+        _, _, poses = apply_alignment_sample(demo, keypoints, planar)
+        assert np.allclose(poses.rotation[:, 1, 0], 0.0)  # tool x has no component along world y

@@ -126,7 +126,7 @@ def test_screening_replays_only_rewarded_samples_in_full():
     for screen, runs_of_zero_reward in ((1, {1, CONFIG.replays}), (0, {CONFIG.replays})):
         config = AlignmentConfig(replays=CONFIG.replays, screen_replays=screen, element_std=0.05, ground_tolerance=10.0)
         evaluator = SampleEvaluator(
-            FakeTargetScene(), result.demo, result.keypoints, config, config.element_covariance("xz"), result.min_distance, 3
+            FakeTargetScene(), result.demo, result.keypoints, config, "xz", result.min_distance, 3
         )
         outcomes = [evaluator.evaluate(i) for i in range(60)]
         zero = [o for o in outcomes if o.reward == 0.0]

@@ -20,7 +20,7 @@ from toolimit.artifacts import save_json
 from toolimit.demos.tool_demo import ToolDemo
 
 #: Bumped when the sampling or the checkpoint layout changes, so old checkpoints are not reused.
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2  # 2: planar rolls face one of the plane's two sides
 
 
 def checkpoint_key(tool: str, world: str, seed: int, config: AlignmentConfig, demo: ToolDemo) -> dict[str, Any]:

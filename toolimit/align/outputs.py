@@ -4,6 +4,8 @@ Formats are the project's shared ones (see the README of the pipeline): the alig
 demo file (head, handle, fps, tool) of the best candidate's motion in the scene's world frame plus
 the tool-frame poses (``tip_position`` (T, 3) m, ``tip_quaternion_wxyz`` (T, 4) scalar first), the
 per-frame roll (T,) rad, the scene's world and every scene parameter as ``param_<name>``.
+``candidates.npz`` stacks the same poses and parameters for all K kept candidates (axis 0), so that
+trajectory optimisation can select the candidate a robot reproduces best.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from toolimit.artifacts import save_json, save_npz
 
 ALIGNMENT_JSON = "alignment.json"
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
+#: Every kept candidate's tool poses and parameters, for selection by robot execution (paper).
+CANDIDATES_NPZ = "candidates.npz"
 
 
 def continuous_quaternions_wxyz(rotation: np.ndarray) -> np.ndarray:
@@ -84,22 +88,44 @@ def aligned_demo_arrays(result: AlignmentResult, candidate: Candidate) -> dict[s
     return arrays
 
 
-def write_alignment(result: AlignmentResult, out_dir: str | Path, demo_path: str, **extra: Any) -> list[Path]:
-    """Write ``alignment.json`` and, when a candidate exists, ``aligned_demo.npz`` (atomically).
+def candidates_arrays(result: AlignmentResult) -> dict[str, Any]:
+    """The arrays of ``candidates.npz``: every candidate's poses (K, T, ...) and parameters (K, ...)."""
+    motions = [result.aligned_motion(candidate)[2] for candidate in result.candidates]
+    arrays: dict[str, Any] = {
+        "tip_position": np.stack([poses.position for poses in motions]),
+        "tip_quaternion_wxyz": np.stack([continuous_quaternions_wxyz(poses.rotation) for poses in motions]),
+        "fps": np.float64(result.demo.fps),
+        "tool": np.str_(result.tool),
+        "scene_world": np.str_(result.world),
+        "alignment_reward": np.array([candidate.reward for candidate in result.candidates]),
+        "sample_index": np.array([candidate.index for candidate in result.candidates]),
+    }
+    for name in result.candidates[0].sample.params:
+        arrays[f"param_{name}"] = np.stack(
+            [np.asarray(candidate.sample.params[name], dtype=float) for candidate in result.candidates]
+        )
+    return arrays
 
-    Without a candidate, a stale ``aligned_demo.npz`` from an earlier run in ``out_dir`` is
+
+def write_alignment(result: AlignmentResult, out_dir: str | Path, demo_path: str, **extra: Any) -> list[Path]:
+    """Write ``alignment.json`` and, when a candidate exists, ``aligned_demo.npz`` and
+    ``candidates.npz`` (atomically).
+
+    Without a candidate, a stale ``aligned_demo.npz`` / ``candidates.npz`` from an earlier run is
     removed so that the folder never pairs a record with another run's motion. ``extra`` keys
     (JSON values) are added to the record. Returns the paths written.
     """
     out_dir = Path(out_dir)
     written = []
     best = result.best
-    demo_file = out_dir / ALIGNED_DEMO_NPZ
+    demo_file, candidates_file = out_dir / ALIGNED_DEMO_NPZ, out_dir / CANDIDATES_NPZ
     if best is not None:
         save_npz(demo_file, **aligned_demo_arrays(result, best))
-        written.append(demo_file)
+        save_npz(candidates_file, **candidates_arrays(result))
+        written += [demo_file, candidates_file]
     else:
         demo_file.unlink(missing_ok=True)
+        candidates_file.unlink(missing_ok=True)
     save_json(out_dir / ALIGNMENT_JSON, alignment_record(result, demo_path, **extra))
     written.append(out_dir / ALIGNMENT_JSON)
     return written

@@ -14,7 +14,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.spatial.distance import pdist
 
-from toolimit.align.config import AlignmentConfig
+from toolimit.align.config import IN_PLANE_ROLLS, AlignmentConfig
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.scenes.base import ParameterSpec
 from toolimit.tools import ToolPose, tool_poses
@@ -150,15 +150,22 @@ def draw_alignment_sample(
     covariance: np.ndarray,
     min_distance: float,
     rng: np.random.Generator,
+    plane: str | None = None,
 ) -> AlignmentSample | None:
     """Draw scale, z offset, rolls and scene parameters; None if the elements cannot be placed.
 
     ``keypoints`` are frame indices of ``demo`` (at least two: first and last frame);
-    ``min_distance`` is d_th in metres; ``covariance`` is the (3, 3) mixture Sigma, m^2.
+    ``min_distance`` is d_th in metres; ``covariance`` is the (3, 3) mixture Sigma, m^2; ``plane``
+    is the planar world's plane (None in 3D): in a plane of ``IN_PLANE_ROLLS`` the whole motion takes
+    the in-plane roll nearest to the first drawn roll, since a blade cannot turn over between
+    keypoints without leaving the plane (the generator is used exactly as in 3D).
     """
     scale = float(rng.choice(np.asarray(config.scales, dtype=float)))
     z_offset = float(rng.normal(0.0, config.z_offset_std))
     rolls = rng.uniform(-np.pi, np.pi, size=len(keypoints) - 1)
+    if plane in IN_PLANE_ROLLS:  # one face for the whole motion: turning over would leave the plane
+        facing_zero, facing_pi = IN_PLANE_ROLLS[plane]
+        rolls = np.full_like(rolls, facing_zero if abs(rolls[0]) < np.pi / 2 else facing_pi)
     params: dict[str, np.ndarray | float] = {}
     for spec in parameters:
         if spec.kind == "uniform":

@@ -137,7 +137,7 @@ class SampleEvaluator:
         demo: ToolDemo,
         keypoints: np.ndarray,
         config: AlignmentConfig,
-        covariance: np.ndarray,
+        plane: str | None,
         min_distance: float,
         seed: int,
     ) -> None:
@@ -145,14 +145,16 @@ class SampleEvaluator:
         self.demo = demo
         self.keypoints = keypoints
         self.config = config
-        self.covariance = covariance
+        self.plane = plane
+        self.covariance = config.element_covariance(plane)
         self.min_distance = min_distance
         self.seed = seed
 
     def draw(self, rng: np.random.Generator) -> AlignmentSample | None:
         """A sample from ``rng`` (the sample's own generator), None if its elements cannot be placed."""
         return draw_alignment_sample(
-            self.demo, self.keypoints, self.scene.parameters, self.config, self.covariance, self.min_distance, rng
+            self.demo, self.keypoints, self.scene.parameters, self.config, self.covariance, self.min_distance, rng,
+            plane=self.plane,
         )
 
     def evaluate(self, index: int) -> SampleOutcome:
@@ -227,7 +229,7 @@ def _outcomes_in_order(
         evaluator.demo,
         evaluator.keypoints,
         evaluator.config,
-        evaluator.covariance,
+        evaluator.plane,
         evaluator.min_distance,
         evaluator.seed,
     )
@@ -285,9 +287,7 @@ def align(
     prepared, plane = prepare_demo(demo, tool, world, scene.control_dt)
     keypoints = velocity_keypoints(prepared, config.keypoint_fraction)
     min_distance = minimum_element_distance(prepared.head)
-    evaluator = SampleEvaluator(
-        scene, prepared, keypoints, config, config.element_covariance(plane), min_distance, seed
-    )
+    evaluator = SampleEvaluator(scene, prepared, keypoints, config, plane, min_distance, seed)
     result = AlignmentResult(tool, world, plane, seed, config, prepared, keypoints, min_distance)
     key = checkpoint_key(tool, world, seed, config, prepared)
     previous_time = 0.0

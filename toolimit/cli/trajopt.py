@@ -44,6 +44,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--velocity-weight", type=float, default=0.01,
                         help="w_v, weight of the joint velocities (rad/s)^2 against the pose error (default: 0.01)")
+    parser.add_argument(
+        "--select-by-robot", action="store_true",
+        help="with --alignment: track every alignment candidate (candidates.npz), replay the robot in each "
+             "candidate's scene and keep the one whose robot replay earns the most goal reward (the paper's "
+             "selection); also writes OUT/selection.json",
+    )
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
@@ -83,6 +89,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--out: {args.out} exists and is not a folder")
     if args.rerun is not None and args.rerun.suffix != ".rrd":
         raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    if args.select_by_robot and args.alignment is None:
+        raise CliError("--select-by-robot: needs --alignment DIR (the candidates of an alignment)")
     if args.alignment is not None:
         if not args.alignment.is_dir():
             raise CliError(f"--alignment: no such folder: {args.alignment}")
@@ -100,10 +108,17 @@ def run(args: argparse.Namespace) -> int:
     initialisations = ("hold", "rollout") if args.init == "both" else (args.init,)
     options = TrackOptions(weights=TrackingWeights(velocity=args.velocity_weight), starts=args.starts,
                            time_scale=scale or 1.0, initialisations=initialisations, progress=not args.quiet)
-    if scale is None:
-        result = choose_time_scale(robot, targets, options, rng=rng)
+    def solve(robot, targets, options, rng):
+        if scale is None:
+            return choose_time_scale(robot, targets, options, rng=rng)
+        return track(robot, targets, options, rng=rng)
+
+    if args.select_by_robot:
+        targets, result = _select_by_robot(args, robot, options, solve)
+        if result is None:
+            return 1
     else:
-        result = track(robot, targets, options, rng=rng)
+        result = solve(robot, targets, options, rng)
     result.save(args.out)
     if args.rerun is not None:
         from toolimit.viz.rerun_trajopt import save_trajectory_recording
@@ -117,3 +132,28 @@ def run(args: argparse.Namespace) -> int:
         f"wrote {args.out}"
     )
     return 0
+
+
+def _select_by_robot(args: argparse.Namespace, robot, options, solve):
+    """Track and replay every candidate of ``args.alignment``; (targets, result) of the best, or
+    (None, None) after saying why no candidate's robot replay earned a reward."""
+    import sys
+
+    from toolimit.align.outputs import CANDIDATES_NPZ
+    from toolimit.artifacts import save_json
+    from toolimit.trajopt.selection import load_candidates, select_by_robot_execution
+
+    tool, world, candidates = load_candidates(args.alignment / CANDIDATES_NPZ)
+    if tool != args.tool:
+        raise CliError(f"--tool: the alignment in {args.alignment} is for the {tool}, not the {args.tool}")
+    selection = select_by_robot_execution(robot, candidates, tool, world, options, solve, seed=args.seed,
+                                          progress=not args.quiet)
+    save_json(args.out / "selection.json", selection.record(candidates))
+    rewards = ", ".join("refused" if r != r else f"{r:.1f}" for r in selection.robot_rewards)
+    print(f"robot replay reward per candidate: {rewards}")
+    if selection.best is None:
+        print(f"no candidate's robot replay earned a goal reward; wrote {args.out / 'selection.json'}", file=sys.stderr)
+        return None, None
+    print(f"selected candidate {selection.best} (alignment reward "
+          f"{candidates[selection.best].alignment_reward:.1f}, robot reward {selection.robot_rewards[selection.best]:.1f})")
+    return candidates[selection.best].targets, selection.trajectories[selection.best]

@@ -38,7 +38,7 @@ def save_alignment_html(result: AlignmentResult, path: str | os.PathLike[str], s
     rng = np.random.default_rng([result.seed, best.index])
     draw_alignment_sample(  # advance the generator exactly as the search did before its reset
         result.demo, result.keypoints, scene.parameters, result.config,
-        result.config.element_covariance(result.plane), result.min_distance, rng,
+        result.config.element_covariance(result.plane), result.min_distance, rng, plane=result.plane,
     )
     frames = replay_scene(scene, poses, best.sample.params, rng)
     keypoints = np.asarray(result.keypoints)

@@ -88,7 +88,7 @@ def _log_alignment(recording: rr.RecordingStream, result: AlignmentResult, scene
     rng = np.random.default_rng([result.seed, best.index])
     draw_alignment_sample(  # advance the generator exactly as the search did before its reset
         result.demo, result.keypoints, scene.parameters, result.config,
-        result.config.element_covariance(result.plane), result.min_distance, rng,
+        result.config.element_covariance(result.plane), result.min_distance, rng, plane=result.plane,
     )
     scene.reset(best.sample.params, rng, batch_size=1)
     for frame, (position, rotation) in enumerate(zip(poses.position, poses.rotation)):

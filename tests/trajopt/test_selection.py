@@ -1,0 +1,71 @@
+"""Selecting the alignment candidate a robot reproduces: the planar arm and the planar spade."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from toolimit.align import AlignmentConfig
+from toolimit.align.outputs import CANDIDATES_NPZ, write_alignment
+from toolimit.align.search import align
+from toolimit.cli import main
+from toolimit.demos import clean_demo, load_demo
+from toolimit.trajopt.selection import load_candidates
+
+
+@pytest.fixture(scope="module")
+def spade_alignment(tmp_path_factory, repo_root):
+    """A planar alignment of a shipped spade demo (5 candidates, seed 0)."""
+    demo_path = repo_root / "data" / "demos" / "spade_04.npz"
+    demo, _ = clean_demo(load_demo(demo_path))
+    result = align(demo, "spade", "planar", AlignmentConfig(candidates=5), seed=0, progress=False)
+    out = tmp_path_factory.mktemp("align")
+    write_alignment(result, out, str(demo_path))
+    return result, out
+
+
+def test_candidates_file_holds_every_candidate(spade_alignment):
+    result, out = spade_alignment
+    tool, world, candidates = load_candidates(out / CANDIDATES_NPZ)
+    assert (tool, world) == ("spade", "planar")
+    assert [c.alignment_reward for c in candidates] == [c.reward for c in result.candidates]
+    for loaded, candidate in zip(candidates, result.candidates):
+        _, _, poses = result.aligned_motion(candidate)
+        assert np.allclose(loaded.targets.positions, poses.position)
+        assert np.allclose(loaded.targets.rotations, poses.rotation, atol=1e-9)
+        assert np.allclose(loaded.params["goal_position"], candidate.sample.params["goal_position"])
+
+
+def test_malformed_candidates_file_is_named(tmp_path):
+    path = tmp_path / CANDIDATES_NPZ
+    np.savez(path, tip_position=np.zeros((2, 5, 3)))
+    with pytest.raises(ValueError, match="candidates.npz: missing keys"):
+        load_candidates(path)
+    with pytest.raises(FileNotFoundError, match="toolimit align"):
+        load_candidates(tmp_path / "absent.npz")
+
+
+def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignment, tmp_path, capsys):
+    """The robot issue's check: the planar arm tracks an aligned planar spade demo and its joint
+    trajectory, replayed in the planar scene, moves sand into the goal box."""
+    _, alignment = spade_alignment
+    out = tmp_path / "planar3"
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment), "--select-by-robot",
+            "--velocity-weight", "1e-4", "--init", "hold", "--quiet", "--out", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    selection = json.loads((out / "selection.json").read_text())
+    best = selection["candidates"][selection["best"]]
+    assert best["robot_reward"] > 0.0
+    assert best["robot_reward"] == max(c["robot_reward"] or 0.0 for c in selection["candidates"])
+    record = json.loads((out / "trajectory.json").read_text())
+    assert record["limit_violations"] == 0 and record["velocity_violations"] == 0
+
+
+def test_selection_needs_an_alignment(tmp_path, capsys, video_demos_dir):
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--poses", str(video_demos_dir / "spade_video1_aligned.npz"),
+            "--select-by-robot", "--out", str(tmp_path / "x")]
+    assert main(argv) == 2
+    assert "--select-by-robot" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
