@@ -1,0 +1,82 @@
+"""`toolimit export`: success, one-line refusals with exit code 2, nothing written on error."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from toolimit.artifacts import save_npz
+from toolimit.cli import main
+
+JOINTS = np.array([f"panda_joint{i}" for i in range(1, 8)])
+DT = 1.0 / 24.0
+
+
+def _trajectory_dir(tmp_path, duration: float):
+    """A rest-to-rest motion of every joint around a middle pose, over ``duration`` s."""
+    times = np.arange(round(duration / DT) + 1) * DT
+    shape = (1.0 - np.cos(2 * np.pi * times / duration)) ** 2 / 4.0
+    q = np.array([0.0, -0.3, 0.0, -1.8, 0.0, 1.6, 0.8]) + np.outer(shape, [0.4, 0.3, -0.3, 0.4, 0.5, -0.4, 0.6])
+    directory = tmp_path / f"trajopt_{duration:g}s"
+    save_npz(directory / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.array([0.1, 0.2, 0.3]),
+             joint_names=JOINTS, dt=DT)
+    return directory
+
+
+def test_export_writes_csv_and_json(tmp_path, capsys):
+    out = tmp_path / "robot"
+    code = main(["export", "--trajectory", str(_trajectory_dir(tmp_path, 4.0)), "--robot", "panda", "--out", str(out),
+                 "--rate", "500"])
+    assert code == 0
+    assert sorted(path.name for path in out.iterdir()) == [
+        "joint_trajectory.json", "joint_trajectory_control_rate.csv", "joint_trajectory_resampled.csv"]
+    summary = json.loads((out / "joint_trajectory.json").read_text())
+    assert summary["resampled_rate_hz"] == 500.0 and summary["n_resampled_samples"] == 2001
+    assert "all limits respected" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("duration", "robot", "message"),
+    [
+        (0.5, "panda", r"refusing to export: panda_joint\d (velocity|acceleration|jerk) .* at t = .*--time-scale"),
+        (4.0, "ur5", r"only robots with published .* 'ur5'"),
+    ],
+)
+def test_refusals_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, duration, robot, message):
+    out = tmp_path / "robot"
+    trajectory = str(_trajectory_dir(tmp_path, duration))
+    code = main(["export", "--trajectory", trajectory, "--robot", robot, "--out", str(out)])
+    assert code == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and error.startswith("toolimit export: error: ")
+    assert re.search(message, error), error
+    assert not out.exists()
+
+
+def test_missing_trajectory_is_a_one_line_error(tmp_path, capsys):
+    code = main(["export", "--trajectory", str(tmp_path / "nothing"), "--robot", "panda", "--out", str(tmp_path / "o")])
+    assert code == 2
+    assert "trajectory.npz: no such file" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_exports_what_trajopt_saves(tmp_path):
+    """The trajectory.npz written by toolimit.trajopt's TrajectoryResult.save is read by the export."""
+    from toolimit.trajopt import TrajectoryResult
+
+    source = _trajectory_dir(tmp_path, 4.0)
+    with np.load(source / "trajectory.npz") as arrays:
+        q, v, base = arrays["q"], arrays["v"], arrays["base"]
+    horizon = len(v)
+    result = TrajectoryResult(
+        robot="panda", tool="spade", joint_names=tuple(JOINTS), q=q, v=v, base=base, dt=DT, time_scale=1.0,
+        position_error=np.zeros(horizon), rotation_error=np.zeros(horizon), limit_margin=np.ones_like(q),
+        velocity_ratio=np.zeros_like(v), statistics={},
+    )
+    saved = result.save(tmp_path / "from_trajopt")
+    assert main(["export", "--trajectory", str(saved), "--robot", "panda", "--out", str(tmp_path / "robot")]) == 0
+    summary = json.loads((tmp_path / "robot" / "joint_trajectory.json").read_text())
+    assert summary["base"]["yaw_rad"] == pytest.approx(0.3)
