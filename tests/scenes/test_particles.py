@@ -5,7 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from toolimit.scenes.spatial.particles import GRAVITY, GranularMaterial, ParticleWorld, StaticBoxes
+from toolimit.scenes.spatial.particles import (
+    GRAVITY,
+    GranularMaterial,
+    ParticleWorld,
+    StaticBoxes,
+)
 from toolimit.scenes.spatial.tool_geometry import SPADE_RIM_HEIGHT, tool_shapes
 from toolimit.tools import tool_spec
 

@@ -6,7 +6,8 @@ import numpy as np
 import pymunk
 import pytest
 
-from toolimit.scenes.planar.kinematic_tool import KinematicTool, batched_pose, to_plane
+from toolimit.scenes.base import batched_pose
+from toolimit.scenes.planar.kinematic_tool import KinematicTool, to_plane
 from toolimit.tools import ToolPose, tool_poses
 
 

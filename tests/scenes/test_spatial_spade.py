@@ -12,8 +12,8 @@ from toolimit.scenes.spatial.particles import GranularMaterial
 from toolimit.scenes.spatial.spade import (
     DEPOSIT_INNER,
     GOAL_INNER,
-    SpatialSpadeScene,
     WORLD_HALF_SIZE,
+    SpatialSpadeScene,
     scripted_scoop,
 )
 from toolimit.tools import ToolPose

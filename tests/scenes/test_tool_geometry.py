@@ -7,8 +7,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from toolimit.scenes.spatial.shapes import box_signed_distance, capsule_signed_distance, posed_tool_shapes
-from toolimit.scenes.spatial.tool_geometry import SPADE_RIM_HEIGHT, tool_boxes, tool_shapes
+from toolimit.scenes.spatial.shapes import (
+    box_signed_distance,
+    capsule_signed_distance,
+    posed_tool_shapes,
+)
+from toolimit.scenes.spatial.tool_geometry import (
+    SPADE_RIM_HEIGHT,
+    tool_boxes,
+    tool_shapes,
+)
 from toolimit.tools import TOOLS, tool_poses, tool_spec
 
 

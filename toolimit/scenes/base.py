@@ -126,6 +126,27 @@ def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:
     return int(batch_size)
 
 
+def batched_pose(tool_pose: ToolPose, batch_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """A ``step``'s pose as (B, 3) head positions (m) and (B, 3, 3) world-from-tool rotations,
+    broadcasting a single pose to every instance.
+
+    Raises ValueError naming the bad shape or non-finite value.
+    """
+    position = np.asarray(tool_pose.position, dtype=float)
+    rotation = np.asarray(tool_pose.rotation, dtype=float)
+    if position.shape not in ((3,), (batch_size, 3)):
+        raise ValueError(f"tool_pose.position must have shape (3,) or ({batch_size}, 3), got {position.shape}")
+    if rotation.shape not in ((3, 3), (batch_size, 3, 3)):
+        raise ValueError(
+            f"tool_pose.rotation must have shape (3, 3) or ({batch_size}, 3, 3), got {rotation.shape}"
+        )
+    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
+        raise ValueError("tool_pose contains non-finite values")
+    position = np.broadcast_to(position, (batch_size, 3)).copy()
+    rotation = np.broadcast_to(rotation, (batch_size, 3, 3)).copy()
+    return position, rotation
+
+
 def require_positive(**values: float) -> None:
     """Raise ValueError naming the first argument that is not a positive finite number."""
     for name, value in values.items():

@@ -53,11 +53,11 @@ from toolimit.viz.meshcat_views import (
     WORLD,
     RobotVisual,
     element_geometry,
-    load_geometry,
     element_material,
-    set_robot_frame,
+    load_geometry,
     replay_scene,
     save_html,
+    set_robot_frame,
     static_visualizer,
 )
 from toolimit.viz.world_elements import GROUND_SIZE, placement, world_elements

@@ -17,10 +17,10 @@ import rerun as rr
 
 from toolimit.align.sampler import draw_alignment_sample
 from toolimit.align.search import AlignmentResult
-from toolimit.artifacts import atomic_path
 from toolimit.scenes.base import Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
+from toolimit.viz.rerun_file import recording_file
 
 HEAD_COLOUR = (230, 120, 30)
 HANDLE_COLOUR = (60, 140, 230)
@@ -36,16 +36,11 @@ def save_alignment_recording(result: AlignmentResult, path: str | Path, scene: S
     reset from the candidate's own generator right after its draw, which is exactly the search's
     first run of that sample when it screened with one run (the default).
     """
-    recording = rr.RecordingStream("toolimit_alignment")
-    if not recording.is_enabled():
-        return None
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        recording.save(tmp)
+    with recording_file(path, "toolimit_alignment") as recording:
+        if recording is None:
+            return None
         _log_alignment(recording, result, scene)
-        recording.flush()
-        recording.disconnect()
-    return path
+    return Path(path)
 
 
 def _log_alignment(recording: rr.RecordingStream, result: AlignmentResult, scene: Scene | None) -> None:

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from toolimit.artifacts import atomic_path
 from toolimit.robots import RobotModel
 from toolimit.trajopt.result import TrajectoryResult
+from toolimit.viz.rerun_file import recording_file
 
 TARGET_COLOUR = (230, 120, 30)
 ROBOT_COLOUR = (60, 140, 230)
@@ -27,16 +27,11 @@ def save_trajectory_recording(result: TrajectoryResult, robot: RobotModel, path:
 
     ``target_positions`` (T, 3) adds the target tool path beside the robot's.
     """
-    recording = rr.RecordingStream("toolimit_trajopt")
-    if not recording.is_enabled():
-        return None
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        recording.save(tmp)
+    with recording_file(path, "toolimit_trajopt") as recording:
+        if recording is None:
+            return None
         _log_trajectory(recording, result, robot, target_positions)
-        recording.flush()
-        recording.disconnect()
-    return path
+    return Path(path)
 
 
 def _log_trajectory(recording: rr.RecordingStream, result: TrajectoryResult, robot: RobotModel,

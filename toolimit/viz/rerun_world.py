@@ -21,9 +21,9 @@ import numpy as np
 import rerun as rr
 from scipy.spatial.transform import Rotation
 
-from toolimit.artifacts import atomic_path
 from toolimit.scenes.base import CONTROL_FPS
 from toolimit.scenes.spatial.tool_geometry import tool_shapes
+from toolimit.viz.rerun_file import recording_file
 from toolimit.viz.world_elements import Element, world_elements
 
 
@@ -102,12 +102,9 @@ def save_replay_recording(
     """
     if len(frames) == 0:
         raise ValueError("a replay needs at least one frame")
-    recording = rr.RecordingStream("toolimit_world_replay")
-    if not recording.is_enabled():
-        return None
-    target = Path(path)
-    with atomic_path(target) as tmp:
-        recording.save(tmp)
+    with recording_file(path, "toolimit_world_replay") as recording:
+        if recording is None:
+            return None
         recording.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_tool_shapes(recording, tool)
         head_path = []
@@ -119,6 +116,4 @@ def save_replay_recording(
                 recording.log("world/tool", rr.Transform3D(translation=position, mat3x3=rotation))
                 head_path.append(np.asarray(position, dtype=float))
                 recording.log("world/tool_path", rr.LineStrips3D([np.array(head_path)], colors=[230, 120, 30]))
-        recording.flush()
-        recording.disconnect()
-    return target
+    return Path(path)

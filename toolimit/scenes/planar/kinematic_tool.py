@@ -28,6 +28,7 @@ from typing import Literal
 import numpy as np
 import pymunk
 
+from toolimit.scenes.base import batched_pose
 from toolimit.tools import ToolPose
 
 Plane = Literal["xz", "xy"]
@@ -39,28 +40,6 @@ PLANE_AXES: dict[str, tuple[int, int]] = {"xz": (0, 2), "xy": (0, 1)}
 def to_plane(points: np.ndarray, plane: Plane) -> np.ndarray:
     """World points or vectors (..., 3) as plane coordinates (..., 2), metres."""
     return np.asarray(points, dtype=float)[..., list(PLANE_AXES[plane])]
-
-
-def batched_pose(tool_pose: ToolPose, batch_size: int) -> tuple[np.ndarray, np.ndarray]:
-    """``tool_pose`` as (B, 3) head positions (m) and (B, 3, 3) world-from-tool rotations.
-
-    (3,) / (3, 3) arrays are broadcast to every instance. Raises ValueError naming a bad shape or
-    a non-finite value.
-    """
-    position = np.asarray(tool_pose.position, dtype=float)
-    rotation = np.asarray(tool_pose.rotation, dtype=float)
-    if position.shape not in ((3,), (batch_size, 3)):
-        raise ValueError(f"tool_pose.position must have shape (3,) or ({batch_size}, 3), got {position.shape}")
-    if rotation.shape not in ((3, 3), (batch_size, 3, 3)):
-        raise ValueError(
-            f"tool_pose.rotation must have shape (3, 3) or ({batch_size}, 3, 3), got {rotation.shape}"
-        )
-    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
-        raise ValueError("tool_pose contains non-finite values")
-    return (
-        np.broadcast_to(position, (batch_size, 3)).copy(),
-        np.broadcast_to(rotation, (batch_size, 3, 3)).copy(),
-    )
 
 
 def _wrap_angle(angle: np.ndarray) -> np.ndarray:

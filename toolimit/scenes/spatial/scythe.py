@@ -25,13 +25,14 @@ from toolimit.scenes.base import (
     CONTROL_FPS,
     ParameterSpec,
     SceneParams,
+    batched_pose,
     check_reset,
     require_counts,
     require_positive,
 )
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
-from toolimit.scenes.spatial.tool_motion import batched_pose, interpolate_poses
+from toolimit.scenes.spatial.tool_motion import interpolate_poses
 from toolimit.tools import ToolPose, rotation_z
 
 

@@ -37,6 +37,7 @@ from toolimit.scenes.base import (
     CONTROL_FPS,
     ParameterSpec,
     SceneParams,
+    batched_pose,
     check_reset,
     require_counts,
     require_positive,
@@ -47,7 +48,6 @@ from toolimit.scenes.spatial.particles import (
     StaticBoxes,
 )
 from toolimit.scenes.spatial.tool_geometry import SPADE_RIM_HEIGHT, tool_shapes
-from toolimit.scenes.spatial.tool_motion import batched_pose
 from toolimit.tools import ToolPose, rotation_z, tool_spec
 
 #: Half side of the square region (m, world x and y) where scene elements may stand.

@@ -1,4 +1,4 @@
-"""Kinematic tool motion shared by the 3D hammer and scythe scenes.
+"""Kinematic tool motion between control steps, shared by the 3D scenes.
 
 A scene's ``step`` receives the tool pose at the end of a control step; between the previous and
 the new pose the tool moves at constant linear and angular velocity (straight line for the head
@@ -10,28 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.spatial.transform import Rotation
-
-from toolimit.tools import ToolPose
-
-
-def batched_pose(tool_pose: ToolPose, batch_size: int) -> tuple[np.ndarray, np.ndarray]:
-    """The pose as (B, 3) positions and (B, 3, 3) rotations, broadcasting a single pose.
-
-    Raises ValueError naming the bad shape or non-finite value.
-    """
-    position = np.asarray(tool_pose.position, dtype=float)
-    rotation = np.asarray(tool_pose.rotation, dtype=float)
-    if position.shape not in ((3,), (batch_size, 3)):
-        raise ValueError(f"tool_pose.position must have shape (3,) or ({batch_size}, 3), got {position.shape}")
-    if rotation.shape not in ((3, 3), (batch_size, 3, 3)):
-        raise ValueError(
-            f"tool_pose.rotation must have shape (3, 3) or ({batch_size}, 3, 3), got {rotation.shape}"
-        )
-    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
-        raise ValueError("tool_pose contains non-finite values")
-    position = np.broadcast_to(position, (batch_size, 3)).copy()
-    rotation = np.broadcast_to(rotation, (batch_size, 3, 3)).copy()
-    return position, rotation
 
 
 def interpolate_poses(
