@@ -83,3 +83,15 @@ def test_iteration_budget_and_bad_guess(planar3):
         solve_sqp(problem, np.array([0.0, np.nan, 0.0]))
     with pytest.raises(ValueError, match="max_iterations"):
         SqpOptions(max_iterations=-1)
+
+
+def test_solves_print_nothing(planar3, capfd):
+    """OSQP 1.x prints a polishing notice on every solve with no active set, verbose or not
+    (osqp/osqp#785): the solver silences it, so a long optimisation keeps the terminal readable."""
+    path = reachable_path(planar3, 12, amplitude=0.05)
+    targets = targets_of(planar3, path, np.zeros(3))
+    solve_sqp(TrackingProblem(planar3, targets, 1 / FPS, q_start=path[0]), np.zeros(3), SqpOptions(max_iterations=5))
+    print("after the solve")
+    out = capfd.readouterr().out
+    assert "Polishing" not in out
+    assert out == "after the solve\n"

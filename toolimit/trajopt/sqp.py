@@ -34,6 +34,8 @@ are hard here) and -5e-7 (spade_example_aligned) relative from Crocoddyl's J.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -215,7 +217,10 @@ class _TrackingQp:
             # the step shrinks to zero as SQP converges while the active set persists: start the
             # primal at zero and the duals at the previous multipliers
             self.solver.warm_start(x=np.zeros(self.n_variables), y=self._duals)
-        result = self.solver.solve(raise_error=False)
+        # OSQP 1.x prints "Polishing not needed ..." through Python's stdout on every solve with an
+        # empty active set, even with verbose=False (osqp/osqp#785); an SQP solves hundreds of QPs.
+        with contextlib.redirect_stdout(io.StringIO()):
+            result = self.solver.solve(raise_error=False)
         self._duals = result.y
         status = result.info.status_val
         usable = (osqp.SolverStatus.OSQP_SOLVED, osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
