@@ -26,11 +26,11 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-from scipy.spatial.transform import Rotation  # noqa: E402
 
 from toolimit.scenes import make_scene  # noqa: E402
 from toolimit.scenes.spatial.spade import SpatialSpadeScene, scripted_scoop  # noqa: E402
 from toolimit.tools import ToolPose, tool_poses  # noqa: E402
+from toolimit.trajopt import from_original_spade_tip, load_pose_targets  # noqa: E402
 
 SHARED = Path(os.environ.get("TOOLIMIT_SHARED", Path(__file__).resolve().parents[2] / "shared"))
 REAL_SPADE = SHARED / "data" / "video_demos" / "spade_video1_aligned.npz"
@@ -40,22 +40,18 @@ SCOOP_PARAMS = {"sand_position": np.zeros(3), "sand_yaw": 0.0, "goal_position": 
 def real_spade_demo() -> tuple[ToolPose, dict] | None:
     """The authors' aligned spade poses as tool-frame poses, with their scene parameters, or None.
 
-    The data's tip frame has the handle end at ``-R (0, -0.161, 0.369)`` (data README); our tool z
-    is that direction, and x (the face normal) is taken as the tip frame's x crossed into it.
+    The recording's tip frame is converted by :func:`toolimit.trajopt.from_original_spade_tip`.
     """
     if not REAL_SPADE.is_file():
         return None
     data = np.load(REAL_SPADE)
-    tip_rotation = Rotation.from_quat(data["tip_quaternion_wxyz"][:, [1, 2, 3, 0]]).as_matrix()
-    axis = np.array([0.0, 0.161, -0.369]) / np.linalg.norm([0.0, 0.161, -0.369])
-    face = np.cross([1.0, 0.0, 0.0], axis)
-    in_tip = np.stack([face, np.cross(axis, face), axis], axis=1)
+    targets = from_original_spade_tip(load_pose_targets(REAL_SPADE))
     params = {
         "sand_position": data["sand_buffer_position"],
         "sand_yaw": float(data["sand_buffer_yaw"]),
         "goal_position": data["goal_box_position"],
     }
-    return ToolPose(data["tip_position"], tip_rotation @ in_tip), params
+    return ToolPose(targets.positions, targets.rotations), params
 
 
 def step_through(scene, motion: ToolPose) -> None:

@@ -53,6 +53,14 @@ def test_original_spade_tip_frame_points_z_at_the_handle(video_demos_dir):
     axis = (handle - original.positions) / np.linalg.norm(handle - original.positions, axis=1, keepdims=True)
     np.testing.assert_allclose(converted.rotations[:, :, 2], axis, atol=1e-12)
     np.testing.assert_allclose(converted.positions, original.positions)
+    np.testing.assert_allclose(np.linalg.det(converted.rotations), 1.0)
+
+
+def test_original_spade_face_points_up_while_carrying(video_demos_dir):
+    """The converted x (the blade's carrying face) points up through the recorded scoop and carry
+    (frames 20 to 80 of the clean example recording), as a face holding sand must."""
+    converted = from_original_spade_tip(load_pose_targets(video_demos_dir / "spade_example_aligned.npz"))
+    assert np.all(converted.rotations[20:81, 2, 0] > 0.85)
 
 
 def test_residual_jacobian_matches_finite_differences(panda):

@@ -47,10 +47,13 @@ def from_original_spade_tip(targets: PoseTargets) -> PoseTargets:
     """Convert poses of the original code's spade tip frame into toolimit's tool frame.
 
     The origin (blade tip = tool head) is kept; z becomes the unit vector from the tip to the handle
-    end (tip frame coordinates (0, 0.161, -0.369) / 0.4026), x stays the tip frame's x (the blade
-    normal, orthogonal to that axis), y = z x x.
+    end (tip frame coordinates (0, 0.161, -0.369) / 0.4026); x, the blade's face normal on the
+    carrying side, is the tip frame's x crossed into that axis, (0, 0.916, 0.401); y = z x x. The
+    data decide the face: in ``spade_example_aligned.npz`` this x points up (z component 0.89 to
+    0.99 over frames 20 to 80) all through the scoop and the carry, as a face holding sand must,
+    while the tip frame's own x stays near horizontal.
     """
     z = _ORIGINAL_SPADE_TIP_TO_HANDLE / np.linalg.norm(_ORIGINAL_SPADE_TIP_TO_HANDLE)
-    x = np.array([1.0, 0.0, 0.0])
+    x = np.cross([1.0, 0.0, 0.0], z)
     offset = np.column_stack([x, np.cross(z, x), z])
     return PoseTargets(targets.positions, targets.rotations @ offset, targets.fps)
