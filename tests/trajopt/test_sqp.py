@@ -95,3 +95,21 @@ def test_solves_print_nothing(planar3, capfd):
     out = capfd.readouterr().out
     assert "Polishing" not in out
     assert out == "after the solve\n"
+
+
+def test_posture_term_keeps_the_arm_near_its_rest_configuration(panda):
+    """With w_p > 0 the optimum trades tracking for staying near q_0: it ends closer to q_0 than
+    without the term, J holds the posture term's value, and the SQP still descends to it."""
+    base = np.array([0.1, -0.2, 0.3])
+    path = reachable_path(panda, 10, amplitude=0.3)
+    targets = targets_of(panda, path, base)
+    distance = {}
+    for w_p in (0.0, 5.0):
+        weights = TrackingWeights(1.0, 0.5, 0.01, posture=w_p)
+        problem = TrackingProblem(panda, targets, 1 / FPS, q_start=path[0], weights=weights)
+        outcome = solve_sqp(problem, base, SqpOptions(max_iterations=30))
+        terms = problem.cost_terms(outcome.base, outcome.q)
+        assert terms["posture"] == pytest.approx(0.5 * w_p * np.sum((outcome.q[1:] - path[0]) ** 2))
+        assert outcome.cost == pytest.approx(terms["total"]) and outcome.cost <= outcome.cost_history[0]
+        distance[w_p] = float(np.sum((outcome.q[1:] - path[0]) ** 2))
+    assert distance[5.0] < 0.5 * distance[0.0]

@@ -44,6 +44,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--velocity-weight", type=float, default=0.01,
                         help="w_v, weight of the joint velocities (rad/s)^2 against the pose error (default: 0.01)")
+    parser.add_argument("--posture-weight", type=float, default=0.0,
+                        help="w_p, weight of the joints' distance to the rest posture (rad)^2 (default: 0, off)")
     parser.add_argument(
         "--select-by-robot", action="store_true",
         help="with --alignment: track every alignment candidate (candidates.npz), replay the robot in each "
@@ -83,8 +85,9 @@ def run(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
     scale = _time_scale(args.time_scale)
-    if not (args.velocity_weight >= 0 and args.velocity_weight < float("inf")):
-        raise CliError(f"--velocity-weight: must be a finite number >= 0, got {args.velocity_weight}")
+    for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
+        if not (value >= 0 and value < float("inf")):
+            raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
     if args.rerun is not None and args.rerun.suffix != ".rrd":
@@ -106,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     robot = make_robot(args.robot, tool=args.tool)
     rng = np.random.default_rng(args.seed)
     initialisations = ("hold", "rollout") if args.init == "both" else (args.init,)
-    options = TrackOptions(weights=TrackingWeights(velocity=args.velocity_weight), starts=args.starts,
+    options = TrackOptions(weights=TrackingWeights(velocity=args.velocity_weight, posture=args.posture_weight), starts=args.starts,
                            time_scale=scale or 1.0, initialisations=initialisations, progress=not args.quiet)
     def solve(robot, targets, options, rng):
         if scale is None:

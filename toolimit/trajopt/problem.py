@@ -29,14 +29,18 @@ class TrackingWeights:
         position: w_pos, on the position part of log6 (metres).
         rotation: w_rot, on the rotation part of log6 (radians).
         velocity: w_v, on the joint velocities (rad/s) squared.
+        posture: w_p, on the joints' distance to the start configuration q_0 (rad) squared, an
+            optional term that keeps a redundant arm near its rest posture; 0 (the default) leaves
+            J exactly as above.
     """
 
     position: float = 1.0
     rotation: float = 0.5
     velocity: float = 0.01
+    posture: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("position", "rotation", "velocity"):
+        for name in ("position", "rotation", "velocity", "posture"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ValueError(f"weight {name} must be finite and >= 0, got {value}")
@@ -210,10 +214,12 @@ class TrackingProblem:
         return self._w * pin.log6(error).vector, self._w[:, None] * jacobian
 
     def cost_terms(self, base: np.ndarray, q: np.ndarray) -> dict[str, float]:
-        """J's terms ``pose`` and ``velocity`` and their sum ``total`` for base (3,), q (T+1, N)."""
+        """J's terms ``pose``, ``velocity``, ``posture`` and their sum ``total`` for base (3,),
+        q (T+1, N)."""
         pose = 0.5 * float(np.sum(self.pose_residuals(base, q) ** 2))
         velocity = 0.5 * self.weights.velocity * float(np.sum(self.velocities(q) ** 2))
-        return {"pose": pose, "velocity": velocity, "total": pose + velocity}
+        posture = 0.5 * self.weights.posture * float(np.sum((q[1:] - self.q_start) ** 2))
+        return {"pose": pose, "velocity": velocity, "posture": posture, "total": pose + velocity + posture}
 
     def cost(self, base: np.ndarray, q: np.ndarray) -> float:
         """J at base (3,) and trajectory q (T+1, N)."""

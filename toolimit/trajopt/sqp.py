@@ -183,14 +183,15 @@ class _TrackingQp:
         self.solver: osqp.OSQP | None = None
 
     def hessian_values(self, jac_base: np.ndarray, jac_arm: np.ndarray, damping: float) -> np.ndarray:
-        """CSC data of the upper-triangular Hessian (Gauss-Newton + velocity term + damping)."""
+        """CSC data of the upper-triangular Hessian (Gauss-Newton + velocity and posture terms +
+        damping)."""
         w_v = self.problem.weights.velocity / self.problem.dt**2
         base_block = np.einsum("tki,tkj->ij", jac_base, jac_base) + damping * np.eye(self.nb)
         cross = np.einsum("tki,tkj->tij", jac_base, jac_arm)  # (T, nb, N)
         arm = np.einsum("tki,tkj->tij", jac_arm, jac_arm)  # (T, N, N)
         diagonal = np.full(self.horizon, 2.0 * w_v)
         diagonal[-1] = w_v
-        arm[:, np.arange(self.n), np.arange(self.n)] += (diagonal + damping)[:, None]
+        arm[:, np.arange(self.n), np.arange(self.n)] += (diagonal + damping + self.problem.weights.posture)[:, None]
         values = np.concatenate([
             base_block[self._base_tri].ravel(),
             cross.ravel(),
@@ -258,7 +259,7 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
         q = project_to_limits(q, dt, lower, upper, vlim)
 
     qp = _TrackingQp(problem, robot.base_dofs, options)
-    w_v = problem.weights.velocity
+    w_v, w_p = problem.weights.velocity, problem.weights.posture
     damping = options.initial_damping
     cost = problem.cost(base, q)
     history = [cost]
@@ -276,7 +277,8 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
         next_velocity = np.vstack([velocity[1:], np.zeros((1, n))])
         gradient = np.concatenate([
             np.einsum("tki,tk->i", jac_base, lin.residuals),
-            (np.einsum("tki,tk->ti", jac_arm, lin.residuals) + w_v / dt * (velocity - next_velocity)).ravel(),
+            (np.einsum("tki,tk->ti", jac_arm, lin.residuals) + w_v / dt * (velocity - next_velocity)
+             + w_p * (q[1:] - problem.q_start)).ravel(),
         ])
         bound_low = np.concatenate([(lower - q[1:]).ravel(), (-vlim - velocity).ravel()])
         bound_up = np.concatenate([(upper - q[1:]).ravel(), (vlim - velocity).ravel()])
@@ -288,7 +290,8 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
         d_residual = jac_base @ d_base + np.einsum("tki,ti->tk", jac_arm, d_q)
         d_velocity = np.diff(np.vstack([np.zeros((1, n)), d_q]), axis=0) / dt
         predicted = -(float(np.sum(lin.residuals * d_residual)) + 0.5 * float(np.sum(d_residual**2))
-                      + w_v * float(np.sum(velocity * d_velocity)) + 0.5 * w_v * float(np.sum(d_velocity**2)))
+                      + w_v * float(np.sum(velocity * d_velocity)) + 0.5 * w_v * float(np.sum(d_velocity**2))
+                      + w_p * float(np.sum((q[1:] - problem.q_start) * d_q)) + 0.5 * w_p * float(np.sum(d_q**2)))
         if predicted <= options.relative_tolerance * cost:
             converged = True  # the model promises less than the tolerance
             break
