@@ -16,7 +16,7 @@ import time
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -31,7 +31,7 @@ from toolimit.align.sampler import (
     minimum_element_distance,
 )
 from toolimit.demos.tool_demo import ToolDemo
-from toolimit.scenes.base import InvalidSceneParameters, Scene
+from toolimit.scenes.base import InvalidSceneParameters, ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
 
@@ -115,6 +115,16 @@ class AlignmentResult:
     def aligned_motion(self, candidate: Candidate) -> tuple[ToolDemo, np.ndarray, ToolPose]:
         """The candidate's aligned demo, per-frame roll (T,) rad and tool poses in the world frame."""
         return apply_alignment_sample(self.demo, self.keypoints, candidate.sample)
+
+    def replay_generator(self, candidate: Candidate, parameters: Sequence[ParameterSpec]) -> np.random.Generator:
+        """The candidate's generator as the search left it after drawing the sample: a scene reset
+        from it (with the scene's ``parameters``) replays the search's first run of that sample."""
+        rng = np.random.default_rng([self.seed, candidate.index])
+        draw_alignment_sample(
+            self.demo, self.keypoints, parameters, self.config, self.config.element_covariance(self.plane),
+            self.min_distance, rng, plane=self.plane,
+        )
+        return rng
 
 
 def prepare_demo(demo: ToolDemo, tool: str, world: str, control_dt: float) -> tuple[ToolDemo, str | None]:

@@ -9,6 +9,7 @@ Exit codes: 0 done, 2 bad input (nothing written).
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from toolimit.cli import CliError
@@ -140,8 +141,6 @@ def run(args: argparse.Namespace) -> int:
 def _select_by_robot(args: argparse.Namespace, robot, options, solve):
     """Track and replay every candidate of ``args.alignment``; (targets, result) of the best, or
     (None, None) after saying why no candidate's robot replay earned a reward."""
-    import sys
-
     from toolimit.align.outputs import CANDIDATES_NPZ
     from toolimit.artifacts import save_json
     from toolimit.trajopt.selection import load_candidates, select_by_robot_execution

@@ -118,11 +118,6 @@ class ToolDemo:
         """Median tool length, metres."""
         return float(np.median(self.lengths))
 
-    @property
-    def midpoint(self) -> np.ndarray:
-        """(T, 3) middle of the tool segment, world frame, metres."""
-        return 0.5 * (self.head + self.handle)
-
     def head_velocity(self) -> np.ndarray:
         """(T, 3) head velocity, m/s, central differences (one-sided at the ends)."""
         return np.gradient(self.head, self.dt, axis=0)

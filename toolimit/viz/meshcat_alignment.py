@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 
-from toolimit.align.sampler import draw_alignment_sample
 from toolimit.align.search import AlignmentResult
 from toolimit.scenes.base import Scene
 from toolimit.scenes.registry import make_scene
@@ -35,11 +34,7 @@ def save_alignment_html(result: AlignmentResult, path: str | os.PathLike[str], s
         raise ValueError(f"the alignment found no candidate in {result.samples_tried} samples: nothing to show")
     _, _, poses = result.aligned_motion(best)
     scene = scene or make_scene(result.tool, result.world)
-    rng = np.random.default_rng([result.seed, best.index])
-    draw_alignment_sample(  # advance the generator exactly as the search did before its reset
-        result.demo, result.keypoints, scene.parameters, result.config,
-        result.config.element_covariance(result.plane), result.min_distance, rng, plane=result.plane,
-    )
+    rng = result.replay_generator(best, scene.parameters)
     frames = replay_scene(scene, poses, best.sample.params, rng)
     keypoints = np.asarray(result.keypoints)
     targets = ToolPose(np.asarray(poses.position)[keypoints], np.asarray(poses.rotation)[keypoints])

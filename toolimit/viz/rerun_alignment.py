@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from toolimit.align.sampler import draw_alignment_sample
 from toolimit.align.search import AlignmentResult
 from toolimit.scenes.base import Scene
 from toolimit.scenes.registry import make_scene
@@ -80,11 +79,7 @@ def _log_alignment(recording: rr.RecordingStream, result: AlignmentResult, scene
                 f"scene/params/{name}", rr.Points3D([value], radii=0.03, colors=ELEMENT_COLOUR, labels=[name]), static=True
             )
     scene = scene or make_scene(result.tool, result.world)
-    rng = np.random.default_rng([result.seed, best.index])
-    draw_alignment_sample(  # advance the generator exactly as the search did before its reset
-        result.demo, result.keypoints, scene.parameters, result.config,
-        result.config.element_covariance(result.plane), result.min_distance, rng, plane=result.plane,
-    )
+    rng = result.replay_generator(best, scene.parameters)
     scene.reset(best.sample.params, rng, batch_size=1)
     for frame, (position, rotation) in enumerate(zip(poses.position, poses.rotation)):
         scene.step(ToolPose(position, rotation))

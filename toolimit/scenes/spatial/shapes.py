@@ -1,4 +1,4 @@
-"""Vectorised geometry of spheres against oriented boxes, capsules and planes (numpy, batched).
+"""Vectorised geometry of spheres against oriented boxes and capsules (numpy, batched).
 
 Every function broadcasts over leading dimensions, so B instances x N spheres x K shapes run as
 one call without a Python loop. Frames: all inputs and outputs are in one common frame (the world
@@ -73,11 +73,6 @@ def capsule_signed_distance(
     safe = np.maximum(axis_distance, 1e-12)[..., None]
     normal = np.where(axis_distance[..., None] > 1e-12, offset / safe, np.array([1.0, 0.0, 0.0]))
     return axis_distance - radius, normal
-
-
-def plane_signed_distance(points: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """Signed distance (...,) from points (..., 3) to the planes through ``point`` with unit ``normal`` (..., 3)."""
-    return np.sum((points - point) * normal, axis=-1)
 
 
 def posed_tool_shapes(
