@@ -13,10 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE
 from toolimit.trajopt.problem import PoseTargets
 
-#: Handle end in the original spade tip frame (shared data README): p_handle = p_tip - R (0, -0.161, 0.369).
-_ORIGINAL_SPADE_TIP_TO_HANDLE = -np.array([0.0, -0.161, 0.369])
 
 
 def load_pose_targets(path: str | os.PathLike[str]) -> PoseTargets:
@@ -53,7 +52,7 @@ def from_original_spade_tip(targets: PoseTargets) -> PoseTargets:
     0.99 over frames 20 to 80) all through the scoop and the carry, as a face holding sand must,
     while the tip frame's own x stays near horizontal.
     """
-    z = _ORIGINAL_SPADE_TIP_TO_HANDLE / np.linalg.norm(_ORIGINAL_SPADE_TIP_TO_HANDLE)
+    z = -SPADE_TIP_TO_HANDLE / np.linalg.norm(SPADE_TIP_TO_HANDLE)  # p_handle = p_tip - R SPADE_TIP_TO_HANDLE
     x = np.cross([1.0, 0.0, 0.0], z)
     offset = np.column_stack([x, np.cross(z, x), z])
     return PoseTargets(targets.positions, targets.rotations @ offset, targets.fps)
