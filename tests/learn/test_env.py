@@ -1,0 +1,89 @@
+"""The Gymnasium environments: check_env on every id, the paper's observation, action and reward."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import toolimit.learn  # noqa: F401  (registers the ids)
+from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, ToolUseEnv, env_id
+from toolimit.learn.simulator import velocity_penalty
+
+IDS = [env_id(tool, world) for tool in ENV_TOOLS for world in ENV_WORLDS]
+
+
+@pytest.mark.parametrize("name", IDS)
+def test_check_env_passes_on_every_registered_id(name):
+    env = gym.make(name)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.action_space.low.min() == -1.0 and env.action_space.high.max() == 1.0
+    n = len(env.unwrapped.task.joint_names)
+    assert env.observation_space.shape == (3 + 4 + n + 1,)
+
+
+def test_unknown_id_is_gymnasiums_error():
+    with pytest.raises(gym.error.Error):
+        gym.make("toolimit/Shovel3D-v0")
+
+
+def test_episode_truncates_at_the_horizon_and_reports_success(spade_task):
+    env = ToolUseEnv("spade", "planar", task=spade_task)
+    observation, _ = env.reset(seed=3)
+    assert observation[-1] == 0.0
+    for t in range(1, spade_task.horizon + 1):
+        observation, reward, terminated, truncated, info = env.step(env.tracking_action())
+        assert not terminated and truncated == (t == spade_task.horizon)
+        assert np.isclose(observation[-1], t / spade_task.horizon)
+    assert info["is_success"] is True and info["goal_reward"] >= 10
+
+
+def test_observation_is_tool_pose_joints_and_time(spade_task):
+    env = ToolUseEnv("spade", "planar", task=spade_task)
+    observation, _ = env.reset(seed=0)
+    simulator = env.simulator
+    position, rotation = simulator.robot.tool_pose(simulator.q[0], spade_task.base)
+    np.testing.assert_allclose(observation[:3], position, atol=1e-6)
+    quaternion = observation[3:7].astype(float)
+    assert np.isclose(np.linalg.norm(quaternion), 1.0, atol=1e-6)
+    np.testing.assert_allclose(observation[7:-1], simulator.q[0], atol=1e-6)
+    assert np.max(np.abs(simulator.q[0] - spade_task.reference_q[0])) < 0.05  # N(0, 0.01) rad noise
+
+
+def test_action_is_a_fraction_of_the_velocity_limit_and_joints_stay_in_limits(spade_task):
+    env = ToolUseEnv("spade", "planar", task=spade_task)
+    env.reset(seed=0)
+    simulator = env.simulator
+    before = simulator.q[0].copy()
+    env.step(np.full(simulator.n_joints, 0.5, dtype=np.float32))
+    expected = np.clip(before + 0.5 * simulator.robot.velocity_limit * simulator.dt, simulator.robot.lower,
+                       simulator.robot.upper)
+    np.testing.assert_allclose(simulator.q[0], expected)
+    for _ in range(60):
+        env.step(np.ones(simulator.n_joints, dtype=np.float32))
+    assert np.all(simulator.q[0] <= simulator.robot.upper + 1e-12)
+
+
+def test_velocity_penalty_only_above_ninety_percent_of_the_limit():
+    limit = np.array([2.0, 1.0])
+    assert velocity_penalty(np.array([[1.8, -0.9]]), limit)[0] == 0.0
+    assert np.isclose(velocity_penalty(np.array([[2.0, 0.0]]), limit)[0], -0.01 * 0.2)
+    assert np.isclose(velocity_penalty(np.array([[0.0, -1.0]]), limit)[0], -0.01 * 0.1)
+
+
+def test_same_seed_same_episode(spade_task):
+    def rollout(seed):
+        env = ToolUseEnv("spade", "planar", task=spade_task)
+        observations = [env.reset(seed=seed)[0]]
+        for _ in range(30):
+            observations.append(env.step(env.tracking_action())[0])
+        return np.array(observations)
+
+    np.testing.assert_array_equal(rollout(5), rollout(5))
+    assert not np.array_equal(rollout(5), rollout(6))
+
+
+def test_a_task_of_another_world_is_refused(spade_task):
+    with pytest.raises(ValueError, match="the task is the spade in planar, not the spade in 3d"):
+        ToolUseEnv("spade", "3d", task=spade_task)

@@ -1,0 +1,68 @@
+"""learn_policy on a tiny budget: its files, an exact resume, evaluation."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from toolimit.learn.evaluate import evaluate
+from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
+
+TINY = LearningConfig(timesteps=0, envs=2, clone_rollouts=2, clone_noise=0.3, clone_steps=20, value_steps=20,
+                      checkpoint_every=1, seed=0)
+
+
+def _parameters(model):
+    return torch.cat([p.detach().flatten() for p in model.policy.parameters()]).numpy()
+
+
+def test_files_and_record(spade_task, tmp_path):
+    horizon = spade_task.horizon
+    config = LearningConfig(**{**TINY.__dict__, "timesteps": 2 * horizon * 2})
+    outcome = learn_policy(spade_task, tmp_path, config, progress=False)
+    for name in ("task.npz", "cloning.json", "checkpoint.zip", "checkpoint.json", "policy.zip", "learning.json",
+                 CURVE_JSONL):
+        assert (tmp_path / name).is_file(), name
+    record = json.loads((tmp_path / "learning.json").read_text())
+    assert record["ppo_env_steps"] == 2 * horizon * 2 and record["cloning_env_steps"] == 2 * horizon
+    assert record["env_steps"] == record["ppo_env_steps"] + record["cloning_env_steps"]
+    assert 0 < record["simulation_time_s"] < record["wall_time_s"]
+    curve = [json.loads(line) for line in (tmp_path / CURVE_JSONL).read_text().splitlines()]
+    assert [c["env_steps"] for c in curve] == [2 * horizon * (k + 1) for k in range(len(curve))]
+    assert {"return_mean", "success_rate", "goal_reward_mean", "action_std_mean", "approx_kl"} <= set(curve[0])
+    model, task = load_policy(tmp_path)
+    np.testing.assert_array_equal(_parameters(model), _parameters(outcome.model))
+    assert task.horizon == horizon
+
+
+def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
+    """Three updates in one go, or one update, a stop, and a second call for the rest: same network."""
+    per_update = spade_task.horizon * 2  # 1 episode per update (toolimit preset) x 2 envs
+    whole = learn_policy(spade_task, tmp_path / "whole", LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update}),
+                         progress=False)
+    learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
+                 progress=False)
+    (tmp_path / "split" / "policy.zip").unlink()  # as if stopped right after the checkpoint
+    resumed = learn_policy(spade_task, tmp_path / "split",
+                           LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update}), progress=False)
+    assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
+    np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
+    lines = (tmp_path / "split" / CURVE_JSONL).read_text().splitlines()
+    assert len(lines) == 3
+
+
+def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path):
+    outcome = learn_policy(spade_task, tmp_path, TINY, progress=False)
+    result = evaluate(outcome.model, spade_task, episodes=3, deterministic=True, seed=1)
+    assert result.joint_positions.shape == (3, spade_task.horizon + 1, 3)
+    assert result.successes.dtype == bool and result.goal_rewards.shape == (3,)
+    record = result.record()
+    assert record["episodes"] == 3 and 0.0 <= record["success_rate"] <= 1.0
+
+
+def test_unknown_preset_is_refused():
+    with pytest.raises(ValueError, match="unknown preset 'fast'"):
+        LearningConfig(preset="fast").settings()

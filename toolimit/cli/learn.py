@@ -1,0 +1,117 @@
+"""``toolimit learn``: learn a robot's policy for a task (stage iv): cloning, then PPO.
+
+The task comes from a pipeline run (``--alignment DIR --trajectory DIR``: the outputs of
+``toolimit align`` and ``toolimit trajopt``), a task file (``--task``), or a registered
+environment's shipped task (``--env toolimit/SpadePlanar-v0``). Writes OUT/task.npz,
+OUT/cloning.json, OUT/curve.jsonl, OUT/checkpoint.*, OUT/policy.zip and OUT/learning.json
+(:mod:`toolimit.learn.training`). Interrupted (Ctrl-C: exit 130), the same command resumes from the
+last checkpoint. Exit codes: 0 done, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from toolimit.cli import CliError
+
+
+def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int) -> None:
+    """The budget and learner flags shared by ``toolimit learn`` and ``toolimit run``."""
+    from toolimit.learn.ppo import PRESETS
+
+    parser.add_argument("--timesteps", type=int, default=timesteps,
+                        help=f"PPO environment steps (default: {timesteps})")
+    parser.add_argument("--envs", type=int, default=16, help="instances stepped together (default: 16)")
+    parser.add_argument("--preset", choices=sorted(PRESETS), default="toolimit",
+                        help="PPO settings: the authors' or the project's (default: toolimit)")
+    parser.add_argument("--no-clone", action="store_true",
+                        help="no behaviour cloning: sparse-reward PPO from a random policy (learned std)")
+    parser.add_argument("--clone-rollouts", type=int, default=8,
+                        help="tracking-controller rollouts to clone (1 = the authors'; default: 8)")
+    parser.add_argument("--clone-noise", type=float, default=0.3,
+                        help="action noise of rollouts 2.. (fraction of the velocity limit), relabelled by the "
+                             "controller (default: 0.3)")
+    parser.add_argument("--clone-steps", type=int, default=6000, help="cloning Adam steps (default: 6000)")
+    parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+
+
+def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
+    """The LearningConfig of the flags of :func:`add_learning_arguments`; CliError for bad values."""
+    from toolimit.learn.training import LearningConfig
+
+    for flag, value, low in (("--timesteps", args.timesteps, 0), ("--envs", args.envs, 1),
+                             ("--clone-rollouts", args.clone_rollouts, 1), ("--clone-steps", args.clone_steps, 0),
+                             ("--checkpoint-every", args.checkpoint_every, 1), ("--seed", args.seed, 0)):
+        if value < low:
+            raise CliError(f"{flag}: must be an integer >= {low}, got {value}")
+    if not 0.0 <= args.clone_noise < float("inf"):
+        raise CliError(f"--clone-noise: must be a finite number >= 0, got {args.clone_noise}")
+    return LearningConfig(timesteps=args.timesteps, envs=args.envs, preset=args.preset, clone=not args.no_clone,
+                          clone_rollouts=args.clone_rollouts, clone_noise=args.clone_noise,
+                          clone_steps=args.clone_steps, checkpoint_every=args.checkpoint_every, seed=args.seed,
+                          scene_kwargs=scene_kwargs)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("learn", help="learn the robot's policy: cloning then PPO (stage iv)",
+                                   description=__doc__.splitlines()[0])
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--task", type=Path, help="a task file (task.npz)")
+    source.add_argument("--alignment", type=Path, help="`toolimit align` output folder (with --trajectory)")
+    source.add_argument("--env", help="a registered id, e.g. toolimit/SpadePlanar-v0 (its shipped task)")
+    parser.add_argument("--trajectory", type=Path, help="`toolimit trajopt` output folder (with --alignment)")
+    parser.add_argument("--robot", default=None, help="with --env: another robot's shipped task")
+    parser.add_argument("--out", required=True, type=Path, help="output folder")
+    add_learning_arguments(parser, timesteps=200_000)
+    parser.add_argument("--rerun", type=Path, default=None, help="also save the learning curves as a rerun .rrd")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.set_defaults(func=run)
+
+
+def load_task(args: argparse.Namespace):
+    """The LearningTask named by --task, --alignment/--trajectory or --env."""
+    from toolimit.learn import LearningTask, shipped_task, task_from_pipeline
+    from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, env_id
+
+    if args.task is not None:
+        return LearningTask.load(args.task)
+    if args.alignment is not None:
+        if args.trajectory is None:
+            raise CliError("--alignment: needs --trajectory DIR (the `toolimit trajopt` output)")
+        return task_from_pipeline(args.alignment, args.trajectory)
+    ids = {env_id(tool, world): (tool, world) for tool in ENV_TOOLS for world in ENV_WORLDS}
+    if args.env not in ids:
+        raise CliError(f"--env: unknown id {args.env!r}; known: {', '.join(sorted(ids))}")
+    return shipped_task(*ids[args.env], robot=args.robot)
+
+
+def run(args: argparse.Namespace) -> int:
+    from toolimit.learn.training import CURVE_JSONL, learn_policy
+
+    config = learning_config(args)
+    if args.trajectory is not None and args.alignment is None:
+        raise CliError("--trajectory: needs --alignment DIR")
+    if args.out.exists() and not args.out.is_dir():
+        raise CliError(f"--out: {args.out} exists and is not a folder")
+    if args.rerun is not None and args.rerun.suffix != ".rrd":
+        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    task = load_task(args)
+    try:
+        outcome = learn_policy(task, args.out, config, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"interrupted: run the same command again to resume from the last checkpoint in {args.out}",
+              file=sys.stderr)
+        return 130
+    if args.rerun is not None:
+        from toolimit.viz.rerun_learning import save_learning_recording
+
+        save_learning_recording(args.out / CURVE_JSONL, args.rerun)
+    record = outcome.record
+    print(f"{task.robot} {task.tool} ({task.world}): {record['env_steps']} env steps "
+          f"({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s "
+          f"({record['simulation_time_s']:.0f} s simulation); wrote {args.out / 'policy.zip'}. "
+          f"Next: toolimit evaluate --policy {args.out}")
+    return 0

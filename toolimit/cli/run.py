@@ -1,0 +1,122 @@
+"""``toolimit run``: the whole pipeline, demonstration to trained policy, resumable stage by stage.
+
+demonstration -> ``align`` (OUT/alignment) -> ``trajopt`` with selection by robot execution
+(OUT/trajectory) -> ``learn``: cloning and PPO (OUT/learning) -> ``evaluate`` (OUT/evaluation.json).
+Each stage is the command of the same name with the flags below, so a stage's folder is exactly
+what that command writes. Run again, the command skips every stage whose output is complete and
+resumes the first one that is not (alignment and learning continue from their checkpoints).
+OUT/run.json keeps each stage's wall time; OUT/evaluation.json has ``success_rate``,
+``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included) and
+``wall_time_s`` (all stages, over every invocation). Exit codes: 0 done, 1 a stage found nothing
+(no alignment candidate, no robot replay with a reward), 2 bad input, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Callable
+
+from toolimit.cli import CliError
+from toolimit.cli.learn import add_learning_arguments, learning_config
+
+RUN_JSON = "run.json"
+#: Budgets of --quick: minutes on a laptop, for CI and first tries.
+QUICK = {"samples": 3000, "candidates": 3, "starts": 2, "timesteps": 2_000, "envs": 4, "clone_steps": 300,
+         "clone_rollouts": 2, "episodes": 4}
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("run", help="the whole pipeline: align, trajopt, learn, evaluate",
+                                   description=__doc__.splitlines()[0])
+    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+    parser.add_argument("--robot", required=True, help="robot model (panda, ur5, talos, planar3)")
+    parser.add_argument("--demo", required=True, type=Path, help="demonstration file")
+    parser.add_argument("--world", default="3d", help="3d or planar (default: 3d)")
+    parser.add_argument("--out", required=True, type=Path, help="output folder (one sub-folder per stage)")
+    parser.add_argument("--samples", type=int, default=20_000, help="alignment sample budget (default: 20000)")
+    parser.add_argument("--candidates", type=int, default=5, help="alignment candidates (default: 5)")
+    parser.add_argument("--starts", type=int, default=8, help="trajopt base initialisations (default: 8)")
+    parser.add_argument("--episodes", type=int, default=20, help="evaluation episodes (default: 20)")
+    add_learning_arguments(parser, timesteps=300_000)
+    parser.add_argument("--quick", action="store_true", help=f"tiny budgets for a first try or CI: {QUICK}")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from toolimit.cli import main as toolimit
+    from toolimit.cli.evaluate import EVALUATION_JSON, evaluation_record
+
+    if args.quick:
+        for name, value in QUICK.items():
+            setattr(args, name, value)
+    learning_config(args)  # checks the learning flags before any work
+    if not args.demo.is_file():
+        raise CliError(f"--demo: no such file: {args.demo}")
+    if args.out.exists() and not args.out.is_dir():
+        raise CliError(f"--out: {args.out} exists and is not a folder")
+    alignment, trajectory, learning = args.out / "alignment", args.out / "trajectory", args.out / "learning"
+    quiet = ["--quiet"] if args.quiet else []
+    time_scale = "auto" if args.world == "3d" else "1"
+    stages: list[tuple[str, Callable[[], bool], list[str]]] = [
+        ("alignment", lambda: _alignment_done(alignment),
+         ["align", "--tool", args.tool, "--world", args.world, "--demo", str(args.demo), "--out", str(alignment),
+          "--samples", str(args.samples), "--candidates", str(args.candidates), "--seed", str(args.seed), *quiet]),
+        ("trajectory", lambda: (trajectory / "trajectory.npz").is_file(),
+         ["trajopt", "--robot", args.robot, "--tool", args.tool, "--alignment", str(alignment), "--select-by-robot",
+          "--velocity-weight", "1e-4", "--time-scale", time_scale, "--starts", str(args.starts),
+          "--seed", str(args.seed), "--out", str(trajectory), *quiet]),
+        ("learning", lambda: (learning / "policy.zip").is_file() and (learning / "learning.json").is_file(),
+         ["learn", "--alignment", str(alignment), "--trajectory", str(trajectory), "--out", str(learning),
+          "--timesteps", str(args.timesteps), "--envs", str(args.envs), "--preset", args.preset,
+          "--clone-rollouts", str(args.clone_rollouts), "--clone-noise", str(args.clone_noise),
+          "--clone-steps", str(args.clone_steps), "--checkpoint-every", str(args.checkpoint_every),
+          "--seed", str(args.seed), *(["--no-clone"] if args.no_clone else []), *quiet]),
+    ]
+    times = _stage_times(args.out)
+    for name, done, command in stages:
+        if done():
+            print(f"[{name}] done earlier: {args.out / name}")
+            continue
+        print(f"[{name}] toolimit {' '.join(command)}")
+        started = time.perf_counter()
+        try:
+            code = toolimit(command)
+        finally:
+            times[name] = times.get(name, 0.0) + time.perf_counter() - started
+            _save_stage_times(args.out, times)
+        if code != 0:
+            return code
+    started = time.perf_counter()
+    record = evaluation_record(learning, args.episodes, seed=1000)
+    times["evaluation"] = time.perf_counter() - started
+    _save_stage_times(args.out, times)
+    learned = json.loads((learning / "learning.json").read_text())
+    record |= {"env_steps": learned["env_steps"], "wall_time_s": sum(times.values()), "stage_times_s": times,
+               "simulation_time_s": learned["simulation_time_s"], "learning_time_s": learned["learning_time_s"]}
+    from toolimit.artifacts import save_json
+
+    save_json(args.out / EVALUATION_JSON, record)
+    print(f"success rate {record['success_rate']:.2f} over {record['episodes']} episodes, goal reward "
+          f"{record['goal_reward_mean']:.1f}, {record['env_steps']} env steps, {record['wall_time_s']:.0f} s; "
+          f"wrote {args.out / EVALUATION_JSON}")
+    return 0
+
+
+def _alignment_done(folder: Path) -> bool:
+    """An alignment that finished with candidates (no checkpoint of an interrupted search left)."""
+    return (folder / "candidates.npz").is_file() and not (folder / "alignment_checkpoint.json").is_file()
+
+
+def _stage_times(out: Path) -> dict[str, float]:
+    path = out / RUN_JSON
+    return json.loads(path.read_text())["stage_times_s"] if path.is_file() else {}
+
+
+def _save_stage_times(out: Path, times: dict[str, float]) -> None:
+    from toolimit.artifacts import save_json
+
+    save_json(out / RUN_JSON, {"stage_times_s": times})

@@ -1,0 +1,149 @@
+"""B copies of one task's robot, tool and scene, stepped together: the core of the environments.
+
+The robot is kinematic, as in the paper: an action is a joint velocity, integrated over one control
+step (1/24 s) and held inside the position limits, and the tool follows by forward kinematics. The
+scene is batched (:mod:`toolimit.scenes.base`), so B instances cost one vectorised physics step.
+Both the Gymnasium environment (B = 1) and the SB3 ``VecEnv`` (B instances) are thin layers on this
+class, so there is one definition of observation, action and reward.
+
+Observation (float32, per instance), the paper's state:
+  tool position (3, m, world frame), tool quaternion (4, w first, world from tool, sign kept
+  continuous along the episode), joint positions (N, rad), time (1): elapsed fraction t / H of the
+  episode. The authors observed the time in seconds; the fraction keeps every entry of order one
+  (SB3 recommends normalised observations) and carries the same information for a fixed H.
+Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's velocity limit (SB3 clips
+  actions to a symmetric normalised space).
+Reward per step (AUTHORS_SETUP.md): (goal reward + velocity penalty) / H, where the penalty is
+  -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) (rad/s, w = 0.01) on the joint velocity
+  v. The authors' weight grew by 1e-4 per reset; here it is constant, so that a state earns the
+  same return whatever the number of episodes before it.
+Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each; every position
+  parameter of the scene + N(0, 0.01) m in x and y (one draw per batch: the scene takes one set of
+  parameters for its B instances); the scene's own randomness (sand jitter, ...).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from toolimit.learn.task import LearningTask
+from toolimit.robots import make_robot
+from toolimit.scenes.registry import make_scene
+from toolimit.tools import ToolPose
+
+#: Standard deviation of the start joints' noise, rad, and of the scene positions' noise, m.
+JOINT_NOISE_STD = 0.01
+PARAM_NOISE_STD = 0.01
+#: Weight w of the velocity penalty and the fraction of the velocity limit where it starts.
+VELOCITY_PENALTY_WEIGHT = 0.01
+VELOCITY_PENALTY_START = 0.9
+
+
+class TaskSimulator:
+    """B instances of ``task`` (see the module docstring for observation, action and reward).
+
+    Args:
+        task: the learning task (robot, scene parameters, reference, horizon).
+        batch_size: B.
+        scene_kwargs: keyword arguments of the scene's constructor (e.g. fewer spheres in tests).
+    """
+
+    def __init__(self, task: LearningTask, batch_size: int = 1, scene_kwargs: dict[str, Any] | None = None):
+        if int(batch_size) < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+        self.task = task
+        self.batch_size = int(batch_size)
+        self.robot = make_robot(task.robot, tool=task.tool)
+        if tuple(self.robot.joint_names) != tuple(task.joint_names):
+            raise ValueError(f"task joints {list(task.joint_names)} are not robot {task.robot}'s "
+                             f"{list(self.robot.joint_names)}")
+        self.scene = make_scene(task.tool, task.world, **(scene_kwargs or {}))
+        if not np.isclose(self.scene.control_dt, task.control_dt):
+            raise ValueError(f"the task's control step {task.control_dt} s differs from the scene's "
+                             f"{self.scene.control_dt} s")
+        self.n_joints = len(task.joint_names)
+        self.observation_size = 3 + 4 + self.n_joints + 1
+        self.dt = task.control_dt
+        self.horizon = task.horizon
+        self.q = np.zeros((self.batch_size, self.n_joints))
+        self.t = 0
+        self._quaternion = np.zeros((self.batch_size, 4))
+        self._position = np.zeros((self.batch_size, 3))
+
+    # ------------------------------------------------------------------------------------ episode
+    def reset(self, rng: np.random.Generator) -> np.ndarray:
+        """Start B episodes; returns the observations (B, D)."""
+        start = self.task.reference_q[0] + rng.normal(0.0, JOINT_NOISE_STD, size=(self.batch_size, self.n_joints))
+        self.q = np.clip(start, self.robot.lower, self.robot.upper)
+        self.scene.reset(self._noisy_params(rng), rng, self.batch_size)
+        self.t = 0
+        self._update_tool(first=True)
+        return self.observation()
+
+    def _noisy_params(self, rng: np.random.Generator) -> dict[str, Any]:
+        """The task's scene parameters with N(0, PARAM_NOISE_STD) m on each position's x and y;
+        the exact ones if the noise makes them invalid (an element pushed into another)."""
+        noisy: dict[str, Any] = {}
+        for spec in self.scene.parameters:
+            value = self.task.params[spec.name]
+            if spec.kind == "position":
+                value = np.asarray(value, dtype=float) + np.r_[rng.normal(0.0, PARAM_NOISE_STD, 2), 0.0]
+            noisy[spec.name] = value
+        return noisy if self.scene.invalid_reason(noisy) is None else dict(self.task.params)
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Apply actions (B, N) in [-1, 1]; returns observations (B, D), rewards (B,) and goal
+        rewards (B,) after the step."""
+        actions = np.asarray(actions, dtype=float).reshape(self.batch_size, self.n_joints)
+        velocity = np.clip(actions, -1.0, 1.0) * self.robot.velocity_limit
+        self.q = np.clip(self.q + velocity * self.dt, self.robot.lower, self.robot.upper)
+        self._update_tool()
+        self.scene.step(ToolPose(self._position, self._rotation))
+        self.t += 1
+        goal = np.asarray(self.scene.goal_reward(), dtype=float)
+        reward = (goal + velocity_penalty(velocity, self.robot.velocity_limit)) / self.horizon
+        return self.observation(), reward, goal
+
+    @property
+    def done(self) -> bool:
+        """True once the episode has reached its horizon H."""
+        return self.t >= self.horizon
+
+    def is_success(self) -> np.ndarray:
+        """(B,) the paper's success test over the steps so far."""
+        return np.asarray(self.scene.is_success(), dtype=bool)
+
+    # ------------------------------------------------------------------------------- observation
+    def _update_tool(self, first: bool = False) -> None:
+        positions, rotations = np.empty((self.batch_size, 3)), np.empty((self.batch_size, 3, 3))
+        for i, q in enumerate(self.q):
+            positions[i], rotations[i] = self.robot.tool_pose(q, self.task.base)
+        quaternion = Rotation.from_matrix(rotations).as_quat(scalar_first=True)
+        reference = np.where(first, np.array([1.0, 0.0, 0.0, 0.0]), self._quaternion)
+        quaternion *= np.where(np.sum(quaternion * reference, axis=1, keepdims=True) < 0.0, -1.0, 1.0)
+        self._position, self._rotation, self._quaternion = positions, rotations, quaternion
+
+    def observation(self) -> np.ndarray:
+        """(B, D) float32: tool position, quaternion (w first), joints, time fraction."""
+        time = np.full((self.batch_size, 1), self.t / self.horizon)
+        return np.concatenate([self._position, self._quaternion, self.q, time], axis=1).astype(np.float32)
+
+    # ------------------------------------------------------------------------------------ expert
+    def tracking_action(self) -> np.ndarray:
+        """(B, N) the tracking controller's action, the authors' expert for cloning: the velocity
+        that reaches the reference's next configuration in one step, (q_ref[t+1] - q_t) / dt,
+        as a fraction of the velocity limit and clipped to [-1, 1]; the reference's last
+        configuration is held after its end."""
+        target = self.task.reference_q[min(self.t + 1, self.task.reference_steps)]
+        return np.clip((target - self.q) / (self.dt * self.robot.velocity_limit), -1.0, 1.0)
+
+
+def velocity_penalty(velocity: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """(B,) -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) for joint velocities (B, N), rad/s."""
+    start = VELOCITY_PENALTY_START * limit
+    above = np.linalg.norm(np.maximum(0.0, velocity - start), axis=1)
+    below = np.linalg.norm(np.minimum(0.0, velocity + start), axis=1)
+    return -VELOCITY_PENALTY_WEIGHT * (above + below)

@@ -1,0 +1,198 @@
+"""A learning task: what the robot's policy starts from, saved from the pipeline's outputs.
+
+Stage iv needs, from the earlier stages, the scene parameters of the selected alignment candidate
+(stage ii) and the robot's optimised joint trajectory with its base (stage iii). A
+:class:`LearningTask` holds exactly these, the reference trajectory resampled at the scene's control
+rate, and the episode horizon. It is saved as one ``task.npz`` so that an environment can be built
+from a fresh install (the shipped tasks of :mod:`toolimit.learn.shipped`) or from a user's own run.
+
+The horizon: the paper's success test asks for the goal to hold for half of the episode (spade: at
+least 10 spheres in the box for half of the steps), so an episode as long as the trajectory can
+fail although the motion delivers. :func:`success_horizon` replays the reference and holds its last
+configuration until the scene reports success, and the task keeps that step count (at most twice
+the trajectory).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from toolimit.artifacts import save_npz
+from toolimit.robots import RobotModel
+from toolimit.scenes.base import Scene, SceneParams
+from toolimit.tools import ToolPose
+from toolimit.trajopt.execution import resample_joints
+from toolimit.trajopt.result import TrajectoryResult
+
+TASK_NPZ = "task.npz"
+_REQUIRED = ("tool", "world", "robot", "joint_names", "reference_q", "base", "horizon", "control_dt", "time_scale")
+
+
+class TaskFileError(ValueError):
+    """A task file that is missing or malformed; the message names the file and the problem."""
+
+
+@dataclass(frozen=True)
+class LearningTask:
+    """The start of stage iv: robot, scene and reference motion.
+
+    Attributes:
+        tool, world, robot: names for ``make_scene(tool, world)`` and ``make_robot(robot, tool)``.
+        joint_names: (N,) the robot's arm joints, in configuration order.
+        params: scene parameters of the selected alignment candidate (positions (3,) m, world frame).
+        base: (3,) robot base x, y (m) and yaw (rad), world frame.
+        reference_q: (T+1, N) optimised joint positions (rad) every ``control_dt`` seconds; the
+            tracking controller follows it and an episode starts near reference_q[0].
+        horizon: H, control steps of an episode (>= T, see the module docstring).
+        control_dt: seconds per control step (the scene's, 1/24 s).
+        time_scale: slow-down of the demonstration the trajectory was optimised at (1 = real time).
+        source: where the task came from (folders, candidate index), for reports.
+    """
+
+    tool: str
+    world: str
+    robot: str
+    joint_names: tuple[str, ...]
+    params: dict[str, Any]
+    base: np.ndarray
+    reference_q: np.ndarray
+    horizon: int
+    control_dt: float
+    time_scale: float
+    source: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def reference_steps(self) -> int:
+        """T, the control steps of the reference trajectory."""
+        return len(self.reference_q) - 1
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the task as one ``.npz`` (atomically); returns the path."""
+        path = Path(path)
+        arrays: dict[str, Any] = {
+            "tool": np.str_(self.tool), "world": np.str_(self.world), "robot": np.str_(self.robot),
+            "joint_names": np.array(self.joint_names), "reference_q": self.reference_q, "base": self.base,
+            "horizon": np.int64(self.horizon), "control_dt": np.float64(self.control_dt),
+            "time_scale": np.float64(self.time_scale),
+        }
+        arrays |= {f"param_{name}": np.asarray(value, dtype=float) for name, value in self.params.items()}
+        arrays |= {f"source_{key}": np.str_(value) for key, value in self.source.items()}
+        save_npz(path, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> "LearningTask":
+        """Read a task written by :meth:`save`; TaskFileError names a missing file, key or bad shape."""
+        path = Path(path)
+        if path.is_dir():
+            path = path / TASK_NPZ
+        if not path.is_file():
+            raise TaskFileError(f"{path}: no such task file")
+        try:
+            with np.load(path) as arrays:
+                data = {key: arrays[key] for key in arrays.files}
+        except (OSError, ValueError) as error:
+            raise TaskFileError(f"{path}: not a task file ({error})") from None
+        missing = [key for key in _REQUIRED if key not in data]
+        if missing:
+            raise TaskFileError(f"{path}: missing keys {missing}")
+        reference_q, base = np.asarray(data["reference_q"], float), np.asarray(data["base"], float)
+        joint_names = tuple(str(name) for name in data["joint_names"])
+        if reference_q.ndim != 2 or reference_q.shape[1] != len(joint_names) or len(reference_q) < 2:
+            raise TaskFileError(f"{path}: reference_q must be (T+1, {len(joint_names)}), got {reference_q.shape}")
+        if base.shape != (3,):
+            raise TaskFileError(f"{path}: base must be (3,), got {base.shape}")
+        horizon = int(data["horizon"])
+        if horizon < len(reference_q) - 1:
+            raise TaskFileError(f"{path}: horizon {horizon} is shorter than the reference ({len(reference_q) - 1} steps)")
+        params = {key.removeprefix("param_"): _param_value(value) for key, value in data.items()
+                  if key.startswith("param_")}
+        source = {key.removeprefix("source_"): str(value) for key, value in data.items() if key.startswith("source_")}
+        return cls(tool=str(data["tool"]), world=str(data["world"]), robot=str(data["robot"]),
+                   joint_names=joint_names, params=params, base=base, reference_q=reference_q, horizon=horizon,
+                   control_dt=float(data["control_dt"]), time_scale=float(data["time_scale"]), source=source)
+
+
+def _param_value(value: np.ndarray) -> np.ndarray | float:
+    return float(value) if value.ndim == 0 else np.asarray(value, dtype=float)
+
+
+def success_horizon(robot: RobotModel, scene: Scene, params: SceneParams, base: np.ndarray,
+                    reference_q: np.ndarray, rng: np.random.Generator) -> int:
+    """The episode length H in [T, 2T] steps: the reference replayed, then its last configuration
+    held, until the scene's success test holds (2T when it never does). See the module docstring."""
+    steps = len(reference_q) - 1
+    held = np.concatenate([reference_q, np.repeat(reference_q[-1:], steps, axis=0)])
+    positions, rotations = robot.tool_poses(held[1:], base)
+    scene.reset(params, rng)
+    for t, (position, rotation) in enumerate(zip(positions, rotations), start=1):
+        scene.step(ToolPose(position, rotation))
+        if t >= steps and bool(scene.is_success()[0]):
+            return t
+    return 2 * steps
+
+
+def task_from_trajectory(trajectory: TrajectoryResult, world: str, params: SceneParams, robot: RobotModel,
+                         scene: Scene, seed: int = 0, source: dict[str, str] | None = None) -> LearningTask:
+    """The task of ``trajectory`` (stage iii's result for ``robot``) in ``scene`` with ``params``.
+
+    Raises ValueError if the trajectory is another robot's.
+    """
+    if tuple(trajectory.joint_names) != tuple(robot.joint_names):
+        raise ValueError(f"the trajectory's joints {list(trajectory.joint_names)} are not robot "
+                         f"{robot.name}'s {list(robot.joint_names)}")
+    reference_q = resample_joints(trajectory.q, trajectory.dt, scene.control_dt)
+    horizon = success_horizon(robot, scene, params, trajectory.base, reference_q, np.random.default_rng(seed))
+    return LearningTask(
+        tool=trajectory.tool, world=world, robot=robot.name, joint_names=tuple(robot.joint_names),
+        params={name: _param_value(np.asarray(value, dtype=float)) for name, value in params.items()},
+        base=np.asarray(trajectory.base, dtype=float), reference_q=reference_q, horizon=horizon,
+        control_dt=scene.control_dt, time_scale=trajectory.time_scale, source=dict(source or {}),
+    )
+
+
+def task_from_pipeline(alignment_dir: str | os.PathLike[str], trajectory_dir: str | os.PathLike[str],
+                       seed: int = 0) -> LearningTask:
+    """The task of a finished pipeline: ``toolimit align`` output and ``toolimit trajopt`` output.
+
+    The scene parameters are those of the candidate the trajectory tracks: the one in
+    ``selection.json`` when trajopt selected by robot execution, else the alignment's best
+    (``aligned_demo.npz``). TaskFileError names a missing file or a tool that does not match.
+    """
+    import json
+
+    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, CANDIDATES_NPZ
+    from toolimit.robots import make_robot
+    from toolimit.scenes.registry import make_scene
+    from toolimit.trajopt.selection import load_candidates
+
+    alignment_dir, trajectory_dir = Path(alignment_dir), Path(trajectory_dir)
+    try:
+        trajectory = TrajectoryResult.load(trajectory_dir)
+    except (OSError, ValueError, KeyError) as error:
+        raise TaskFileError(str(error)) from None
+    selection_file = trajectory_dir / "selection.json"
+    if selection_file.is_file():
+        best = json.loads(selection_file.read_text())["best"]
+        tool, world, candidates = load_candidates(alignment_dir / CANDIDATES_NPZ)
+        params = candidates[int(best)].params
+        candidate = str(best)
+    else:
+        demo_file = alignment_dir / ALIGNED_DEMO_NPZ
+        if not demo_file.is_file():
+            raise TaskFileError(f"{demo_file}: no such file (run `toolimit align` first)")
+        with np.load(demo_file) as arrays:
+            tool, world = str(arrays["tool"]), str(arrays["scene_world"])
+            params = {k.removeprefix("param_"): _param_value(arrays[k]) for k in arrays.files if k.startswith("param_")}
+        candidate = "best"
+    if tool != trajectory.tool:
+        raise TaskFileError(f"{trajectory_dir}: the trajectory is for the {trajectory.tool}, "
+                            f"the alignment in {alignment_dir} for the {tool}")
+    robot = make_robot(trajectory.robot, tool=tool)
+    source = {"alignment": str(alignment_dir), "trajectory": str(trajectory_dir), "candidate": candidate}
+    return task_from_trajectory(trajectory, world, params, robot, make_scene(tool, world), seed, source)

@@ -1,0 +1,204 @@
+"""Learning a policy for a task, end to end: cloning, value warm-up, PPO, with checkpoints.
+
+``learn_policy(task, out_dir, LearningConfig(...))`` writes into ``out_dir``:
+``task.npz`` (the task), ``cloning.json`` (data and losses), ``checkpoint.zip/.json`` (every few
+updates), ``curve.jsonl`` (one line per update: env steps, mean return, success rate, goal reward,
+standard deviation, KL), ``policy.zip`` (the final SB3 model) and ``learning.json`` (settings,
+env steps, wall time split between simulation and learning). Run again on the same folder, it
+resumes from the last checkpoint; a finished run returns at once.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import torch
+from stable_baselines3 import PPO
+from stable_baselines3.common.callbacks import BaseCallback
+from tqdm.auto import tqdm
+
+from toolimit.artifacts import save_json
+from toolimit.learn.cloning import clone, collect_demonstrations
+from toolimit.learn.ppo import (CHECKPOINT_STATE, POLICY_ZIP, PRESETS, PpoSettings, make_ppo, resume_or_start,
+                                train)
+from toolimit.learn.task import TASK_NPZ, LearningTask
+from toolimit.learn.vec_env import BatchedTaskVecEnv
+
+LEARNING_JSON = "learning.json"
+CLONING_JSON = "cloning.json"
+CURVE_JSONL = "curve.jsonl"
+
+
+@dataclass(frozen=True)
+class LearningConfig:
+    """Budgets and choices of :func:`learn_policy`.
+
+    Attributes:
+        timesteps: PPO environment steps (cloning rollouts come on top).
+        envs: B, instances stepped together.
+        preset: a key of :data:`toolimit.learn.ppo.PRESETS`.
+        clone: initialise by behaviour cloning (False: the sparse-reward baseline, learned std).
+        clone_rollouts: tracking-controller rollouts (1 = the authors' single rollout).
+        clone_noise: std of the action noise of rollouts 1.. (normalised units), relabelled.
+        clone_steps, value_steps: Adam steps of cloning and of the value warm-up.
+        checkpoint_every: updates between checkpoints.
+        seed: seeds everything (environments, torch, PPO).
+        scene_kwargs: the scene's constructor arguments.
+    """
+
+    timesteps: int = 200_000
+    envs: int = 16
+    preset: str = "toolimit"
+    clone: bool = True
+    clone_rollouts: int = 1
+    clone_noise: float = 0.0
+    clone_steps: int = 6000
+    value_steps: int = 2000
+    checkpoint_every: int = 5
+    seed: int = 0
+    scene_kwargs: dict[str, Any] | None = None
+
+    def settings(self) -> PpoSettings:
+        """The PPO settings of the preset."""
+        if self.preset not in PRESETS:
+            raise ValueError(f"unknown preset {self.preset!r}; known: {', '.join(PRESETS)}")
+        return PRESETS[self.preset]
+
+
+@dataclass(frozen=True)
+class LearningOutcome:
+    """What :func:`learn_policy` returns: the model, its folder and the learning record."""
+
+    model: PPO
+    directory: Path
+    record: dict[str, Any]
+
+
+class _Curve(BaseCallback):
+    """Appends one line per update to ``curve.jsonl`` and hands it to ``on_record`` (e.g. rerun)."""
+
+    def __init__(self, path: Path, total: int, on_record: Callable[[dict[str, Any]], None] | None, progress: bool):
+        super().__init__()
+        self.path, self.on_record = path, on_record
+        self.bar = tqdm(total=total, desc="PPO", unit="step", disable=not progress, leave=False)
+        self.returns: list[float] = []
+        self.successes: list[bool] = []
+        self.goals: list[float] = []
+
+    def _on_training_start(self) -> None:
+        self.bar.n = self.model.num_timesteps
+        self.bar.refresh()
+
+    def _on_step(self) -> bool:
+        self.bar.update(self.training_env.num_envs)
+        for info in self.locals["infos"]:
+            if "episode" in info:
+                self.returns.append(info["episode"]["r"])
+                self.successes.append(info["is_success"])
+                self.goals.append(info["goal_reward"])
+        return True
+
+    def _on_rollout_end(self) -> None:
+        if not self.returns:
+            return
+        logged = self.model.logger.name_to_value
+        record = {
+            "env_steps": int(self.model.num_timesteps), "return_mean": float(np.mean(self.returns)),
+            "success_rate": float(np.mean(self.successes)), "goal_reward_mean": float(np.mean(self.goals)),
+            "action_std_mean": float(torch.exp(self.model.policy.log_std).mean()),
+            "approx_kl": float(logged.get("train/approx_kl", float("nan"))),
+        }
+        with open(self.path, "a") as handle:
+            handle.write(json.dumps(record) + "\n")
+        if self.on_record is not None:
+            self.on_record(record)
+        self.returns, self.successes, self.goals = [], [], []
+
+    def _on_training_end(self) -> None:
+        self.bar.close()
+
+
+def learn_policy(task: LearningTask, out_dir: str | Path, config: LearningConfig = LearningConfig(),
+                 on_record: Callable[[dict[str, Any]], None] | None = None, progress: bool = True) -> LearningOutcome:
+    """Clone (optional), warm the value up and fine-tune by PPO; see the module docstring."""
+    out_dir = Path(out_dir)
+    started = time.perf_counter()
+    settings = config.settings()
+    torch.manual_seed(config.seed)
+    task.save(out_dir / TASK_NPZ)
+    env = BatchedTaskVecEnv(task, config.envs, seed=config.seed, scene_kwargs=config.scene_kwargs)
+    cloning_record: dict[str, Any] = {}
+
+    def start() -> PPO:
+        model = make_ppo(env, settings, seed=config.seed, learn_std=not config.clone)
+        if config.clone:
+            cloning_record.update(_clone(model, task, config, settings, progress))
+            save_json(out_dir / CLONING_JSON, cloning_record)
+        return model
+
+    previous = _previous_record(out_dir)
+    model, resumed = resume_or_start(out_dir, env, start)
+    curve = out_dir / CURVE_JSONL
+    _truncate_curve(curve, model.num_timesteps)
+    train(model, config.timesteps, out_dir, config.checkpoint_every,
+          [_Curve(curve, config.timesteps, on_record, progress)])
+    cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
+    wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
+    simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
+    record = {
+        "tool": task.tool, "world": task.world, "robot": task.robot, "config": asdict(config),
+        "ppo": asdict(settings), "ppo_env_steps": int(model.num_timesteps), "cloning_env_steps": int(cloning_steps),
+        "env_steps": int(model.num_timesteps + cloning_steps), "wall_time_s": wall, "simulation_time_s": simulation,
+        "learning_time_s": wall - simulation, "resumed": resumed,
+    }
+    save_json(out_dir / LEARNING_JSON, record)
+    return LearningOutcome(model, out_dir, record)
+
+
+def _clone(model: PPO, task: LearningTask, config: LearningConfig, settings: PpoSettings,
+           progress: bool) -> dict[str, Any]:
+    """Collect the demonstrations, clone and warm up; the JSON record."""
+    demonstrations = collect_demonstrations(task, config.clone_rollouts, config.clone_noise, settings.gamma,
+                                            config.seed, config.scene_kwargs)
+    report = clone(model.policy, demonstrations, config.clone_steps, value_steps=config.value_steps,
+                   progress=progress)
+    return {"rollouts": config.clone_rollouts, "action_noise": config.clone_noise,
+            "env_steps": demonstrations.env_steps, "pairs": len(demonstrations.actions),
+            "controller_goal_rewards": demonstrations.goal_rewards.tolist(),
+            "controller_successes": demonstrations.successes.tolist(), **asdict(report)}
+
+
+def _previous_record(out_dir: Path) -> dict[str, Any]:
+    """The learning record of an interrupted run (its cloning steps and times), if the checkpoint
+    exists; the cloning record stands in for a run interrupted before its first record."""
+    if not (out_dir / CHECKPOINT_STATE).is_file():
+        return {}
+    for name, key in ((LEARNING_JSON, None), (CLONING_JSON, "env_steps")):
+        path = out_dir / name
+        if path.is_file():
+            data = json.loads(path.read_text())
+            return data if key is None else {"cloning_env_steps": data[key]}
+    return {}
+
+
+def _truncate_curve(path: Path, env_steps: int) -> None:
+    """Drop curve lines beyond ``env_steps`` (written after the checkpoint a run resumes from)."""
+    if not path.is_file():
+        return
+    lines = [line for line in path.read_text().splitlines() if json.loads(line)["env_steps"] <= env_steps]
+    path.write_text("".join(line + "\n" for line in lines))
+
+
+def load_policy(directory: str | Path) -> tuple[PPO, LearningTask]:
+    """The final model and task of a :func:`learn_policy` folder; FileNotFoundError names what is missing."""
+    directory = Path(directory)
+    policy = directory / POLICY_ZIP
+    if not policy.is_file():
+        raise FileNotFoundError(f"{policy}: no such file (run `toolimit learn` first)")
+    return PPO.load(policy, device="cpu"), LearningTask.load(directory / TASK_NPZ)
+
