@@ -11,7 +11,7 @@ import torch
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
 
-TINY = LearningConfig(timesteps=0, envs=2, clone_rollouts=2, clone_noise=0.3, clone_steps=20, value_steps=20,
+TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20, value_steps=20,
                       checkpoint_every=1, seed=0)
 
 

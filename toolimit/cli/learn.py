@@ -24,8 +24,8 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int) -> N
     parser.add_argument("--timesteps", type=int, default=timesteps,
                         help=f"PPO environment steps (default: {timesteps})")
     parser.add_argument("--envs", type=int, default=16, help="instances stepped together (default: 16)")
-    parser.add_argument("--preset", choices=sorted(PRESETS), default="toolimit",
-                        help="PPO settings: the authors' or the project's (default: toolimit)")
+    parser.add_argument("--preset", choices=sorted(PRESETS), default="authors",
+                        help="PPO settings: the authors' or the project's looser gradient clip (default: authors)")
     parser.add_argument("--no-clone", action="store_true",
                         help="no behaviour cloning: sparse-reward PPO from a random policy (learned std)")
     parser.add_argument("--clone-rollouts", type=int, default=8,

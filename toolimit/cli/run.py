@@ -1,7 +1,9 @@
 """``toolimit run``: the whole pipeline, demonstration to trained policy, resumable stage by stage.
 
 demonstration -> ``align`` (OUT/alignment) -> ``trajopt`` with selection by robot execution
-(OUT/trajectory) -> ``learn``: cloning and PPO (OUT/learning) -> ``evaluate`` (OUT/evaluation.json).
+(OUT/trajectory) -> ``learn``: cloning and PPO (OUT/learning) -> ``evaluate`` (OUT/evaluation.json)
+-> the policy's deterministic rollout (OUT/policy_rollout, stage iii's format) -> ``export``
+(OUT/export: retimed and limit-checked for open-loop execution; robots with published limits).
 Each stage is the command of the same name with the flags below, so a stage's folder is exactly
 what that command writes. Run again, the command skips every stage whose output is complete and
 resumes the first one that is not (alignment and learning continue from their checkpoints).
@@ -41,9 +43,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--starts", type=int, default=8, help="trajopt base initialisations (default: 8)")
     parser.add_argument("--episodes", type=int, default=20, help="evaluation episodes (default: 20)")
     add_learning_arguments(parser, timesteps=300_000)
-    parser.add_argument("--quick", action="store_true", help=f"tiny budgets for a first try or CI: {QUICK}")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"tiny budgets for a first try or CI (flags given explicitly win): {QUICK}")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
-    parser.set_defaults(func=run)
+    parser.set_defaults(func=run, budget_defaults={name: parser.get_default(name) for name in QUICK})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -52,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.quick:
         for name, value in QUICK.items():
-            setattr(args, name, value)
+            if getattr(args, name) == args.budget_defaults[name]:
+                setattr(args, name, value)
     learning_config(args)  # checks the learning flags before any work
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
@@ -79,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     times = _stage_times(args.out)
     for name, done, command in stages:
         if done():
+            _check_same_run(args, args.out / name)
             print(f"[{name}] done earlier: {args.out / name}")
             continue
         print(f"[{name}] toolimit {' '.join(command)}")
@@ -100,10 +105,50 @@ def run(args: argparse.Namespace) -> int:
     from toolimit.artifacts import save_json
 
     save_json(args.out / EVALUATION_JSON, record)
+    code = _export_rollout(args, learning, toolimit)
     print(f"success rate {record['success_rate']:.2f} over {record['episodes']} episodes, goal reward "
           f"{record['goal_reward_mean']:.1f}, {record['env_steps']} env steps, {record['wall_time_s']:.0f} s; "
           f"wrote {args.out / EVALUATION_JSON}")
-    return 0
+    return code
+
+
+def _export_rollout(args: argparse.Namespace, learning: Path, toolimit: Callable[[list[str]], int]) -> int:
+    """The policy's deterministic rollout to OUT/policy_rollout (stage iii's format), exported by
+    ``toolimit export`` to OUT/export for robots with published limits; the export's exit code."""
+    from toolimit.deploy.limits import SUPPORTED_ROBOTS
+    from toolimit.learn.evaluate import evaluate, save_rollout_trajectory
+    from toolimit.learn.training import load_policy
+
+    model, task = load_policy(learning)
+    rollout = evaluate(model, task, episodes=1, deterministic=True, seed=1000)
+    folder = save_rollout_trajectory(rollout.joint_positions[0], task, args.out / "policy_rollout")
+    if args.robot not in SUPPORTED_ROBOTS:
+        print(f"[export] skipped: {args.robot} has no published acceleration and jerk limits "
+              f"(the policy's rollout is in {folder})")
+        return 0
+    command = ["export", "--trajectory", str(folder), "--robot", args.robot, "--out", str(args.out / "export")]
+    print(f"[export] toolimit {' '.join(command)}")
+    return toolimit(command)
+
+
+def _check_same_run(args: argparse.Namespace, folder: Path) -> None:
+    """CliError if a finished stage's folder was made for another tool, world or robot."""
+    from toolimit.learn.task import TASK_NPZ, LearningTask
+
+    found: dict[str, str] = {}
+    if (folder / "alignment.json").is_file():
+        record = json.loads((folder / "alignment.json").read_text())
+        found = {"tool": record["tool"], "world": record["world"]}
+    elif (folder / "trajectory.json").is_file():
+        record = json.loads((folder / "trajectory.json").read_text())
+        found = {"tool": record["tool"], "robot": record["robot"]}
+    elif (folder / TASK_NPZ).is_file():
+        task = LearningTask.load(folder / TASK_NPZ)
+        found = {"tool": task.tool, "world": task.world, "robot": task.robot}
+    for key, value in found.items():
+        if value != getattr(args, key):
+            raise CliError(f"{folder} holds a finished stage for {key} {value!r}, not {getattr(args, key)!r}: "
+                           "choose another --out or remove that folder")
 
 
 def _alignment_done(folder: Path) -> bool:

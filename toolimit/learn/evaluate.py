@@ -7,12 +7,15 @@ explores). All episodes of one evaluation run at once in one batched scene.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
 
+from toolimit.artifacts import save_npz
 from toolimit.learn.task import LearningTask
+from toolimit.trajopt.result import TRAJECTORY_NPZ
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
 
@@ -60,3 +63,16 @@ def evaluate(model: BaseAlgorithm, task: LearningTask, episodes: int = 20, deter
         joints.append(env.simulator.q.copy())
     return Evaluation(deterministic, np.array([info["goal_reward"] for info in infos]),
                       np.array([info["is_success"] for info in infos]), returns, np.stack(joints, axis=1))
+
+
+def save_rollout_trajectory(joint_positions: np.ndarray, task: LearningTask, directory: str | Path) -> Path:
+    """Write one rollout's joints (H+1, N) rad as ``directory/trajectory.npz`` in stage iii's format
+    (q, v = diff(q) / dt, base, joint_names, dt), so that ``toolimit export`` retimes and checks it
+    for open-loop execution on the real robot (the paper's last step). Returns the folder."""
+    q = np.asarray(joint_positions, dtype=float)
+    if q.ndim != 2 or q.shape[1] != len(task.joint_names):
+        raise ValueError(f"joint_positions must be (H+1, {len(task.joint_names)}), got {q.shape}")
+    directory = Path(directory)
+    save_npz(directory / TRAJECTORY_NPZ, q=q, v=np.diff(q, axis=0) / task.control_dt, base=task.base,
+             joint_names=np.array(task.joint_names), dt=np.float64(task.control_dt))
+    return directory

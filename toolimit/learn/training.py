@@ -53,7 +53,7 @@ class LearningConfig:
 
     timesteps: int = 200_000
     envs: int = 16
-    preset: str = "toolimit"
+    preset: str = "authors"
     clone: bool = True
     clone_rollouts: int = 1
     clone_noise: float = 0.0

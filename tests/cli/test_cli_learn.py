@@ -1,0 +1,65 @@
+"""toolimit learn / evaluate / run: tiny budgets, resume, and one-line errors for bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from toolimit.cli import main
+
+TINY = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "2", "--clone-steps", "10", "--quiet"]
+
+
+def _error_line(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    return err[0]
+
+
+def test_learn_from_a_registered_id_then_evaluate(tmp_path, capsys):
+    out = tmp_path / "learned"
+    assert main(["learn", "--env", "toolimit/SpadePlanar-v0", "--out", str(out), *TINY]) == 0
+    assert "Next: toolimit evaluate" in capsys.readouterr().out
+    assert main(["evaluate", "--policy", str(out), "--episodes", "2"]) == 0
+    record = json.loads((out / "evaluation.json").read_text())
+    assert record["episodes"] == 2 and {"success_rate", "goal_reward_mean", "stochastic"} <= set(record)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["learn", "--env", "toolimit/Shovel3D-v0"], "--env: unknown id 'toolimit/Shovel3D-v0'"),
+    (["learn", "--task", "absent.npz"], "absent.npz: no such task file"),
+    (["learn", "--alignment", "absent"], "--alignment: needs --trajectory"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--robot", "ur5"], "no shipped task for the spade in planar with robot ur5"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
+    (["evaluate", "--policy", "absent"], "--policy: no such folder"),
+])
+def test_bad_input_gets_one_line(tmp_path, capsys, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    assert main([*argv, *([] if argv[0] == "evaluate" else ["--out", "out"])]) == 2
+    assert message in _error_line(capsys)
+    assert not (tmp_path / "out").exists()
+
+
+def test_learn_from_a_missing_stage_output(tmp_path, capsys):
+    (tmp_path / "alignment").mkdir()
+    assert main(["learn", "--alignment", str(tmp_path / "alignment"), "--trajectory", str(tmp_path / "trajectory"),
+                 "--out", str(tmp_path / "out"), *TINY]) == 2
+    assert "trajectory.npz: no such file" in _error_line(capsys)
+
+
+def test_run_quick_resumes_and_refuses_another_robot(tmp_path, repo_root, capsys):
+    """The planar pipeline on --quick budgets; a second call skips every finished stage."""
+    argv = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo",
+            str(repo_root / "data" / "demos" / "spade_03.npz"), "--out", str(tmp_path), "--quick", "--quiet"]
+    assert main([*argv, "--timesteps", "0"]) == 0
+    evaluation = json.loads((tmp_path / "evaluation.json").read_text())
+    assert {"success_rate", "goal_reward_mean", "episodes", "env_steps", "wall_time_s"} <= set(evaluation)
+    assert evaluation["env_steps"] > 0 and evaluation["episodes"] == 4
+    assert (tmp_path / "policy_rollout" / "trajectory.npz").is_file()
+    assert "[export] skipped: planar3 has no published" in capsys.readouterr().out
+    assert main([*argv, "--timesteps", "0"]) == 0
+    assert capsys.readouterr().out.count("done earlier") == 3
+    other = [*argv[:4], "panda", *argv[5:]]
+    assert main(other) == 2
+    assert "holds a finished stage for robot 'planar3', not 'panda'" in _error_line(capsys)
