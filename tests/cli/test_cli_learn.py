@@ -30,7 +30,8 @@ def test_learn_from_a_registered_id_then_evaluate(tmp_path, capsys):
     (["learn", "--env", "toolimit/Shovel3D-v0"], "--env: unknown id 'toolimit/Shovel3D-v0'"),
     (["learn", "--task", "absent.npz"], "absent.npz: no such task file"),
     (["learn", "--alignment", "absent"], "--alignment: needs --trajectory"),
-    (["learn", "--env", "toolimit/SpadePlanar-v0", "--robot", "ur5"], "no shipped task for the spade in planar with robot ur5"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--robot", "ur5"],
+     "no shipped task for the spade in planar with robot ur5"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
     (["evaluate", "--policy", "absent"], "--policy: no such folder"),
 ])

@@ -11,8 +11,8 @@ import torch
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
 
-TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20, value_steps=20,
-                      checkpoint_every=1, seed=0)
+TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20,
+                      value_steps=20, checkpoint_every=1, seed=0)
 
 
 def _parameters(model):
@@ -41,13 +41,12 @@ def test_files_and_record(spade_task, tmp_path):
 def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
     """Three updates in one go, or one update, a stop, and a second call for the rest: same network."""
     per_update = spade_task.horizon * 2  # 1 episode per update (toolimit preset) x 2 envs
-    whole = learn_policy(spade_task, tmp_path / "whole", LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update}),
-                         progress=False)
+    three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
+    whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
     learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
                  progress=False)
     (tmp_path / "split" / "policy.zip").unlink()  # as if stopped right after the checkpoint
-    resumed = learn_policy(spade_task, tmp_path / "split",
-                           LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update}), progress=False)
+    resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
     lines = (tmp_path / "split" / CURVE_JSONL).read_text().splitlines()

@@ -38,6 +38,7 @@ def shipped_task(tool: str, world: str, robot: str | None = None) -> LearningTas
     path = shipped_task_path(tool, world, robot)
     if not path.is_file():
         known = ", ".join("/".join(names) for names in shipped_tasks())
-        raise ValueError(f"no shipped task for the {tool} in {world} with robot {robot or DEFAULT_ROBOTS[(tool, world)]}; "
-                         f"shipped: {known}; build your own with `toolimit run` and pass task=DIR/task.npz")
+        name = robot or DEFAULT_ROBOTS[(tool, world)]
+        raise ValueError(f"no shipped task for the {tool} in {world} with robot {name}; shipped: {known}; "
+                         "build your own with `toolimit run` and pass task=DIR/task.npz")
     return LearningTask.load(path)

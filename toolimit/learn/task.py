@@ -109,7 +109,8 @@ class LearningTask:
             raise TaskFileError(f"{path}: base must be (3,), got {base.shape}")
         horizon = int(data["horizon"])
         if horizon < len(reference_q) - 1:
-            raise TaskFileError(f"{path}: horizon {horizon} is shorter than the reference ({len(reference_q) - 1} steps)")
+            raise TaskFileError(f"{path}: horizon {horizon} is shorter than the reference "
+                                f"({len(reference_q) - 1} steps)")
         params = {key.removeprefix("param_"): _param_value(value) for key, value in data.items()
                   if key.startswith("param_")}
         source = {key.removeprefix("source_"): str(value) for key, value in data.items() if key.startswith("source_")}
@@ -130,7 +131,7 @@ def success_horizon(robot: RobotModel, scene: Scene, params: SceneParams, base: 
     held = np.concatenate([reference_q, np.repeat(reference_q[-1:], steps, axis=0)])
     positions, rotations = robot.tool_poses(held[1:], base)
     scene.reset(params, rng)
-    for t, (position, rotation) in enumerate(zip(positions, rotations), start=1):
+    for t, (position, rotation) in enumerate(zip(positions, rotations, strict=True), start=1):
         scene.step(ToolPose(position, rotation))
         if t >= steps and bool(scene.is_success()[0]):
             return t
