@@ -65,3 +65,18 @@ def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path)
 def test_unknown_preset_is_refused():
     with pytest.raises(ValueError, match="unknown preset 'fast'"):
         LearningConfig(preset="fast").settings()
+
+
+def test_learned_std_stays_above_the_authors_floor(spade_task, tmp_path):
+    """Without cloning the std is learned; after an update it is never below 0.01 rad/s."""
+    from toolimit.learn import BatchedTaskVecEnv
+    from toolimit.learn.ppo import PRESETS, STD_FLOOR, make_ppo, train
+
+    env = BatchedTaskVecEnv(spade_task, 2, seed=0)
+    model = make_ppo(env, PRESETS["toolimit"], seed=0, learn_std=True)
+    assert model.policy.log_std.requires_grad
+    with torch.no_grad():
+        model.policy.log_std.fill_(-20.0)
+    train(model, 2 * 2 * spade_task.horizon, tmp_path, checkpoint_every=10)
+    std = torch.exp(model.policy.log_std).detach().numpy() * env.simulator.robot.velocity_limit
+    assert np.all(std >= STD_FLOOR * (1 - 1e-5)), std

@@ -104,6 +104,12 @@ class _StdFloor(BaseCallback):
     """Keeps a learned standard deviation at or above STD_FLOOR rad/s after every update."""
 
     def _on_rollout_start(self) -> None:
+        self._clamp()
+
+    def _on_training_end(self) -> None:
+        self._clamp()
+
+    def _clamp(self) -> None:
         policy = self.model.policy
         if policy.log_std.requires_grad:
             floor = np.log(STD_FLOOR / self.training_env.simulator.robot.velocity_limit)
