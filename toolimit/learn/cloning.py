@@ -15,6 +15,7 @@ discounted returns so that PPO's first advantages are not those of an untrained 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -126,33 +127,50 @@ class CloningReport:
 
 
 def clone(policy: ActorCriticPolicy, demonstrations: Demonstrations, steps: int = 6000, learning_rate: float = 1e-4,
-          value_steps: int = 2000, progress: bool = True) -> CloningReport:
-    """Fit the policy's action mean to the demonstrations (full-batch Adam, the authors' 6,000 steps
-    at 1e-4), then warm the value network up on their returns (``value_steps``, same optimiser
-    settings). The standard deviation is left as it is (see :func:`fix_action_std`)."""
+          value_steps: int = 2000, batch_size: int = 512, seed: int = 0, progress: bool = True) -> CloningReport:
+    """Fit the policy's action mean to the demonstrations (Adam, the authors' 6,000 steps at 1e-4),
+    then warm the value network up on their returns (``value_steps``, same optimiser settings).
+
+    Each step uses the whole data set when it holds at most ``batch_size`` pairs (the authors'
+    full batch: one rollout of a few hundred steps), else ``batch_size`` pairs drawn at random
+    (seeded by ``seed``), so that more rollouts do not make a step dearer. The standard deviation
+    is left as it is (see :func:`fix_action_std`).
+    """
     observations = torch.as_tensor(demonstrations.observations, device=policy.device)
     actions = torch.as_tensor(demonstrations.actions, device=policy.device)
     returns = torch.as_tensor(demonstrations.returns, device=policy.device)
     actor = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters()]
     critic = [*policy.mlp_extractor.value_net.parameters(), *policy.value_net.parameters()]
-    action_losses = _fit(actor, lambda: mean_action_loss(policy, observations, actions), steps, learning_rate,
-                         progress, "cloning")
-    value_losses = _fit(critic, lambda: torch.mean((policy.predict_values(observations).flatten() - returns) ** 2),
-                        value_steps, learning_rate, progress, "value warm-up")
+    generator = torch.Generator().manual_seed(seed)
+
+    def action_loss(rows: torch.Tensor | slice) -> torch.Tensor:
+        return mean_action_loss(policy, observations[rows], actions[rows])
+
+    def value_loss(rows: torch.Tensor | slice) -> torch.Tensor:
+        return torch.mean((policy.predict_values(observations[rows]).flatten() - returns[rows]) ** 2)
+
+    size = len(observations)
+    action_losses = _fit(actor, action_loss, size, batch_size, steps, learning_rate, generator, progress, "cloning")
+    value_losses = _fit(critic, value_loss, size, batch_size, value_steps, learning_rate, generator, progress,
+                        "value warm-up")
     return CloningReport(action_losses[0], action_losses[-1], value_losses[0], value_losses[-1])
 
 
-def _fit(parameters: list[torch.nn.Parameter], loss_of: Any, steps: int, learning_rate: float, progress: bool,
+def _fit(parameters: list[torch.nn.Parameter], loss_of: Callable[[torch.Tensor | slice], torch.Tensor], size: int,
+         batch_size: int, steps: int, learning_rate: float, generator: torch.Generator, progress: bool,
          description: str) -> list[float]:
-    """Minimise ``loss_of()`` over ``parameters`` for ``steps`` Adam steps; the loss before and after."""
+    """Minimise ``loss_of(rows)`` over ``parameters`` for ``steps`` Adam steps on minibatches of
+    ``batch_size`` of ``size`` rows (all rows if fewer); the whole-data loss before and after."""
     optimiser = torch.optim.Adam(parameters, lr=learning_rate)
+    everything = slice(None)
     with torch.no_grad():
-        losses = [float(loss_of())]
+        losses = [float(loss_of(everything))]
     for _ in tqdm(range(steps), desc=description, unit="step", disable=not progress, leave=False):
+        rows = everything if size <= batch_size else torch.randint(size, (batch_size,), generator=generator)
         optimiser.zero_grad()
-        loss = loss_of()
+        loss = loss_of(rows)
         loss.backward()
         optimiser.step()
     with torch.no_grad():
-        losses.append(float(loss_of()))
+        losses.append(float(loss_of(everything)))
     return losses

@@ -166,7 +166,7 @@ def _clone(model: PPO, task: LearningTask, config: LearningConfig, settings: Ppo
     demonstrations = collect_demonstrations(task, config.clone_rollouts, config.clone_noise, settings.gamma,
                                             config.seed, config.scene_kwargs)
     report = clone(model.policy, demonstrations, config.clone_steps, value_steps=config.value_steps,
-                   progress=progress)
+                   seed=config.seed, progress=progress)
     return {"rollouts": config.clone_rollouts, "action_noise": config.clone_noise,
             "env_steps": demonstrations.env_steps, "pairs": len(demonstrations.actions),
             "controller_goal_rewards": demonstrations.goal_rewards.tolist(),
