@@ -49,6 +49,9 @@ class LearningConfig:
         checkpoint_every: updates between checkpoints.
         seed: seeds everything (environments, torch, PPO).
         scene_kwargs: the scene's constructor arguments.
+        torch_threads: torch's intra-op threads while learning. One by default: the networks are
+            small, and with two threads on a two-core machine that also simulates, a cloning step
+            of 512 pairs took 176 ms instead of 11 ms (measured, other core busy).
     """
 
     timesteps: int = 200_000
@@ -62,6 +65,7 @@ class LearningConfig:
     checkpoint_every: int = 5
     seed: int = 0
     scene_kwargs: dict[str, Any] | None = None
+    torch_threads: int = 1
 
     def settings(self) -> PpoSettings:
         """The PPO settings of the preset."""
@@ -126,7 +130,16 @@ class _Curve(BaseCallback):
 def learn_policy(task: LearningTask, out_dir: str | Path, config: LearningConfig = LearningConfig(),
                  on_record: Callable[[dict[str, Any]], None] | None = None, progress: bool = True) -> LearningOutcome:
     """Clone (optional), warm the value up and fine-tune by PPO; see the module docstring."""
-    out_dir = Path(out_dir)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(config.torch_threads)
+    try:
+        return _learn_policy(task, Path(out_dir), config, on_record, progress)
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _learn_policy(task: LearningTask, out_dir: Path, config: LearningConfig,
+                  on_record: Callable[[dict[str, Any]], None] | None, progress: bool) -> LearningOutcome:
     started = time.perf_counter()
     settings = config.settings()
     torch.manual_seed(config.seed)
