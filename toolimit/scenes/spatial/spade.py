@@ -31,6 +31,8 @@ spade motion for given parameters (tests, benchmarks, notebooks).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from toolimit.scenes.base import (
@@ -54,22 +56,37 @@ from toolimit.tools import ToolPose, rotation_z, tool_spec
 WORLD_HALF_SIZE = 5.0
 #: Inner side of the square sand deposit (m), its wall height and thickness (m).
 DEPOSIT_INNER = 0.4
-DEPOSIT_WALL_HEIGHT = 0.1
+DEPOSIT_WALL_HEIGHT = 0.07
 #: Inner side of the goal box (m), its wall height (m).
-GOAL_INNER = 0.4
-GOAL_WALL_HEIGHT = 0.1
+GOAL_INNER = 0.5
+GOAL_WALL_HEIGHT = 0.07
+#: Goal-reward region: sphere centres within the box's inner square and 0 <= z <= this height (m).
+GOAL_REGION_HEIGHT = 0.1
 #: Wall thickness of the deposit and the goal box (m).
 WALL_THICKNESS = 0.01
 #: Spheres in the box needed at a step for it to count towards success, and the fraction of steps.
 SUCCESS_SPHERES = 10
 SUCCESS_FRACTION = 0.5
-#: Seconds of simulation at reset that let the jittered lattice pile settle.
-SETTLE_TIME = 0.25
-#: Horizontal gap (m) between neighbouring spheres of the initial lattice (jitter is +- half of it).
-LATTICE_GAP = 0.002
+#: The heap: spheres dropped one every HEAP_DROP_SPACING m in height from a column with
+#: horizontal N(0, HEAP_DROP_SIGMA) m offsets into a closed square pen of inner side HEAP_PEN, and
+#: simulated to rest; each instance then shifts it by up to +-(DEPOSIT_INNER - HEAP_PEN) / 2 in x and y.
+HEAP_DROP_SIGMA = 0.05
+HEAP_DROP_SPACING = 0.1
+HEAP_PEN = 0.36
+#: Largest sphere count of a scene.
+MAX_SPHERES = 400
+#: Most control steps the heap drop may take to come to rest.
+HEAP_MAX_STEPS = 2400
 #: Dense reward weights and the deposit region of the paper's code (see the module docstring).
 DENSE_IN_BOX, DENSE_ON_SPADE, DENSE_OUTSIDE = 0.1, 0.01, -0.01
 DEPOSIT_REGION_RADIUS, DEPOSIT_REGION_HEIGHT = 0.4, 0.3
+#: The sand of the original scene (module docstring): 2 cm spheres that hardly roll (sphere-sphere
+#: friction 5), PhysX-averaged sphere-spade and sphere-ground friction 2.5, sphere-wall 3, speed
+#: capped at 1 m/s.
+AUTHORS_SAND = GranularMaterial(
+    radius=0.02, mu_static=5.0, mu_kinetic=5.0, tool_mu_static=2.5, tool_mu_kinetic=2.5,
+    ground_mu_static=2.5, ground_mu_kinetic=2.5, wall_mu_static=3.0, wall_mu_kinetic=3.0, max_speed=1.0,
+)
 
 
 def _walls(inner: float, height: float, sides: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -89,26 +106,30 @@ def _walls(inner: float, height: float, sides: tuple[str, ...]) -> tuple[np.ndar
     return np.array(centers), np.array(halves)
 
 
-def pile_lattice(n_spheres: int, radius: float, gap: float = LATTICE_GAP) -> np.ndarray:
-    """(n_spheres, 3) centres of a two-layer pile on the ground around the origin, metres.
+@functools.lru_cache(maxsize=8)
+def settled_heap(n_spheres: int, material: GranularMaterial, substeps: int = 10) -> np.ndarray:
+    """(n_spheres, 3) centres of a heap at rest around the origin on the ground, metres (cached).
 
-    The base is the smallest m x m square lattice (spacing 2 r + gap) such that it and the
-    (m-1) x (m-1) layer resting in its hollows (1 mm above touching) hold all spheres; the base is
-    filled first, the upper layer from its centre outwards. Two layers stay put: steeper piles
-    would slump (their 45-degree faces exceed the 31-degree angle of repose).
+    As the original scene builds its pile: spheres dropped one every ``HEAP_DROP_SPACING`` m in
+    height from a column with N(0, ``HEAP_DROP_SIGMA``) horizontal offsets (seed 0), simulated
+    until every sphere rests, here inside a closed pen of inner side ``HEAP_PEN`` so that the heap
+    fits the deposit. Raises RuntimeError if it does not come to rest.
     """
-    spacing = 2.0 * radius + gap
-    rise = np.sqrt((2.0 * radius) ** 2 - spacing**2 / 2.0) + 0.001
-    size = 1
-    while size * size + (size - 1) ** 2 < n_spheres:
-        size += 1
-    layers = []
-    for level, m in enumerate((size, size - 1)):
-        coords = (np.arange(m) - (m - 1) / 2) * spacing
-        x, y = np.meshgrid(coords, coords, indexing="ij")
-        layer = np.stack([x.ravel(), y.ravel(), np.full(m * m, radius + level * rise)], axis=-1)
-        layers.append(layer[np.argsort(np.hypot(layer[:, 0], layer[:, 1]), kind="stable")])
-    return np.concatenate(layers)[:n_spheres]
+    rng = np.random.default_rng(0)
+    start = np.column_stack([
+        np.clip(rng.normal(0.0, HEAP_DROP_SIGMA, (n_spheres, 2)), -HEAP_PEN / 2 + material.radius,
+                HEAP_PEN / 2 - material.radius),
+        material.radius + 0.01 + HEAP_DROP_SPACING * np.arange(n_spheres),
+    ])
+    centers, halves = _walls(HEAP_PEN, 2 * material.radius * n_spheres, ("-x", "+x", "-y", "+y"))
+    pen = StaticBoxes(centers, np.repeat(np.eye(3)[None], 4, 0), halves)
+    world = ParticleWorld(material, pen, None)
+    world.reset(start[None])
+    for step in range(HEAP_MAX_STEPS):
+        world.advance(1.0 / CONTROL_FPS, substeps)
+        if step > CONTROL_FPS and world.kinetic_energy()[0] == 0.0:
+            return world.positions[0].copy()
+    raise RuntimeError(f"the heap of {n_spheres} spheres did not come to rest in {HEAP_MAX_STEPS} steps")
 
 
 def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
@@ -178,13 +199,13 @@ class SpatialSpadeScene:
 
     def __init__(
         self,
-        n_spheres: int = 50,
+        n_spheres: int = 200,
         substeps: int = 10,
-        material: GranularMaterial = GranularMaterial(),
+        material: GranularMaterial = AUTHORS_SAND,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
-        if not 30 <= int(n_spheres) <= 100:
-            raise ValueError(f"n_spheres must be in 30..100, got {n_spheres!r}")
+        if not 1 <= int(n_spheres) <= MAX_SPHERES:
+            raise ValueError(f"n_spheres must be in 1..{MAX_SPHERES}, got {n_spheres!r}")
         require_counts(substeps=substeps)
         require_positive(control_dt=control_dt)
         self.n_spheres = int(n_spheres)
@@ -256,14 +277,10 @@ class SpatialSpadeScene:
             rotations=np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
             half_extents=np.concatenate([deposit_halves, goal_halves]),
         )
-        radius = self.material.radius
-        local = np.broadcast_to(pile_lattice(self.n_spheres, radius), (b, self.n_spheres, 3)).copy()
-        local[..., :2] += rng.uniform(-LATTICE_GAP / 2, LATTICE_GAP / 2, size=(b, self.n_spheres, 2))
+        heap = settled_heap(self.n_spheres, self.material, self.substeps)
+        shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
         self._world = ParticleWorld(self.material, self.walls, self.shapes)
-        self._world.reset(self.sand_position + local @ deposit_rotation.T)
-        settle_steps = max(1, int(round(SETTLE_TIME / self.control_dt)))
-        for _ in range(settle_steps):
-            self._world.advance(self.control_dt, self.substeps)
+        self._world.reset(self.sand_position + (heap + shift) @ deposit_rotation.T)
         #: Control steps since reset, and (B,) steps that ended with >= SUCCESS_SPHERES in the box.
         self.steps = 0
         self.successful_steps = np.zeros(b, dtype=int)
@@ -311,7 +328,10 @@ class SpatialSpadeScene:
         """(B, N) bool: sphere centres inside the goal box."""
         offset = self._require_reset().positions - self.goal_position
         half = GOAL_INNER / 2
-        return (np.abs(offset[..., 0]) < half) & (np.abs(offset[..., 1]) < half) & (offset[..., 2] < GOAL_WALL_HEIGHT)
+        return (
+            (np.abs(offset[..., 0]) < half) & (np.abs(offset[..., 1]) < half)
+            & (offset[..., 2] >= 0.0) & (offset[..., 2] <= GOAL_REGION_HEIGHT)
+        )
 
     def spheres_on_spade(self) -> np.ndarray:
         """(B, N) bool: sphere centres above the blade's carrying face, within its rim (tool frame)."""
