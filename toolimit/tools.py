@@ -54,7 +54,7 @@ class ToolSpec:
 
 
 TOOLS: dict[str, ToolSpec] = {
-    "spade": ToolSpec("spade", length=0.40, head_length=0.17, head_width=0.12),
+    "spade": ToolSpec("spade", length=0.40, head_length=0.22, head_width=0.20),
     "hammer": ToolSpec("hammer", length=0.33, head_length=0.035, head_width=0.11, roll_symmetric=True),
     "scythe": ToolSpec("scythe", length=1.0, head_length=0.05, head_width=0.45),
 }

@@ -22,10 +22,13 @@ MU_GROUND_S, MU_GROUND_K, MU_WALL_S, MU_WALL_K, MASS_SCALING, RELAXATION = 5, 6,
 SLEEP_SPEED, MAX_SPEED, PAIR_MARGIN, GRAVITY = 11, 12, 13, 14
 N_COEFFICIENTS = 15
 
-_JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
+_JIT = {"cache": True, "nogil": True, "fastmath": True, "error_model": "numpy"}
+#: Small helpers called per sphere and per shape are inlined by numba: a call that passes arrays
+#: costs reference counting, several times the work of the helper itself.
+_INLINE = {**_JIT, "inline": "always"}
 
 
-@nb.njit(**_JIT)
+@nb.njit(**_INLINE)
 def _friction(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k):  # type: ignore[no-untyped-def]
     """Coulomb friction by position: minus the tangential part of the relative displacement r if it
     is below mu_s depth (static), else the part mu_k depth of it (kinetic). Returns 3 floats."""
@@ -39,7 +42,7 @@ def _friction(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k):  # type: ignore[no-unt
     return -tx * scale, -ty * scale, -tz * scale
 
 
-@nb.njit(**_JIT)
+@nb.njit(**_INLINE)
 def _box_contact(s, e, half, radius, mu_s, mu_k, out):  # type: ignore[no-untyped-def]
     """Contact of a sphere moving from ``s`` to ``e`` (3,) (box-local frame) with a box of half
     extents ``half`` (3,). Writes the normal push (out[0:3]) and the friction correction
@@ -50,17 +53,14 @@ def _box_contact(s, e, half, radius, mu_s, mu_k, out):  # type: ignore[no-untype
     the nearest face if ``s`` is inside), whatever the depth.
     """
     # Closest point of the box to the end point.
-    d2 = 0.0
-    offset = np.empty(3)
-    for a in range(3):
-        c = min(max(e[a], -half[a]), half[a])
-        offset[a] = e[a] - c
-        d2 += offset[a] * offset[a]
-    distance = math.sqrt(d2)
+    ox = e[0] - min(max(e[0], -half[0]), half[0])
+    oy = e[1] - min(max(e[1], -half[1]), half[1])
+    oz = e[2] - min(max(e[2], -half[2]), half[2])
+    distance = math.sqrt(ox * ox + oy * oy + oz * oz)
     contact = distance < radius
     depth = radius - distance
     inv = 1.0 / max(distance, 1e-15)
-    nx, ny, nz = offset[0] * inv, offset[1] * inv, offset[2] * inv
+    nx, ny, nz = ox * inv, oy * inv, oz * inv
     # Slab test of the segment against the box itself.
     t_entry, t_exit = -1e300, 1e300
     face, face_excess = 0, -1e300
@@ -95,17 +95,25 @@ def _box_contact(s, e, half, radius, mu_s, mu_k, out):  # type: ignore[no-untype
     return True
 
 
-@nb.njit(**_JIT)
-def _boxes_correction(start, end, centers, rotations, halves, radius, mu_s, mu_k, moved):  # type: ignore[no-untyped-def]
+@nb.njit(**_INLINE)
+def _boxes_correction(start, end, centers, rotations, halves, bounds, radius, mu_s, mu_k, moved, scratch):  # type: ignore[no-untyped-def]
     """Correction ``moved`` (3,) of a sphere (start, end (3,) in the boxes' common frame) against
     oriented boxes (K, ...): pushes summed (faces meeting at an edge are orthogonal), friction
-    averaged over the touching boxes. Returns the number of touching boxes."""
-    s, e, out = np.empty(3), np.empty(3), np.empty(6)
-    push = np.zeros(3)
-    friction = np.zeros(3)
+    averaged over the touching boxes. ``bounds`` (K, 2, 3): each box's axis-aligned bounds in the
+    common frame grown by the radius (broad phase); ``scratch``: (18,) work space. Returns the
+    number of touching boxes."""
+    s, e, out, push, friction = scratch[0:3], scratch[3:6], scratch[6:12], scratch[12:15], scratch[15:18]
+    push[:] = 0.0
+    friction[:] = 0.0
     touching = 0
     for k in range(centers.shape[0]):
         near = True
+        for a in range(3):
+            if min(start[a], end[a]) >= bounds[k, 1, a] or max(start[a], end[a]) <= bounds[k, 0, a]:
+                near = False
+                break
+        if not near:
+            continue
         for a in range(3):
             sa = 0.0
             ea = 0.0
@@ -133,19 +141,19 @@ def _boxes_correction(start, end, centers, rotations, halves, radius, mu_s, mu_k
 def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
     """One averaged Jacobi pass over instance b's candidate sphere pairs, with mass scaling and
     friction; updates ``predicted[b]`` in place."""
-    n = predicted.shape[1]
+    now, before, listed = predicted[b], previous[b], pairs[b]
+    n = now.shape[0]
     r2 = 2.0 * coefficients[RADIUS]
     mu_s, mu_k, k_mass = coefficients[MU_SPHERE_S], coefficients[MU_SPHERE_K], coefficients[MASS_SCALING]
-    total = np.zeros((n, 3))
-    count = np.zeros(n)
+    total = np.zeros((n, 4))  # summed corrections (x, y, z) and number of contacts
     inv_mass = np.empty(n)
     for i in range(n):
-        inv_mass[i] = math.exp(k_mass * predicted[b, i, 2])
+        inv_mass[i] = math.exp(k_mass * now[i, 2])
     for p in range(n_pairs[b]):
-        i, j = pairs[b, p, 0], pairs[b, p, 1]
-        ox = predicted[b, i, 0] - predicted[b, j, 0]
-        oy = predicted[b, i, 1] - predicted[b, j, 1]
-        oz = predicted[b, i, 2] - predicted[b, j, 2]
+        i, j = listed[p, 0], listed[p, 1]
+        ox = now[i, 0] - now[j, 0]
+        oy = now[i, 1] - now[j, 1]
+        oz = now[i, 2] - now[j, 2]
         d2 = ox * ox + oy * oy + oz * oz
         if d2 >= r2 * r2:
             continue
@@ -153,40 +161,55 @@ def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: i
         depth = r2 - distance
         inv = 1.0 / max(distance, 1e-15)
         nx, ny, nz = ox * inv, oy * inv, oz * inv
-        rx = predicted[b, i, 0] - previous[b, i, 0] - predicted[b, j, 0] + previous[b, j, 0] + nx * depth
-        ry = predicted[b, i, 1] - previous[b, i, 1] - predicted[b, j, 1] + previous[b, j, 1] + ny * depth
-        rz = predicted[b, i, 2] - previous[b, i, 2] - predicted[b, j, 2] + previous[b, j, 2] + nz * depth
+        rx = now[i, 0] - before[i, 0] - now[j, 0] + before[j, 0] + nx * depth
+        ry = now[i, 1] - before[i, 1] - now[j, 1] + before[j, 1] + ny * depth
+        rz = now[i, 2] - before[i, 2] - now[j, 2] + before[j, 2] + nz * depth
         fx, fy, fz = _friction(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k)
         cx, cy, cz = nx * depth + fx, ny * depth + fy, nz * depth + fz
         share = inv_mass[i] / (inv_mass[i] + inv_mass[j])
+        rest = share - 1.0
         total[i, 0] += share * cx
         total[i, 1] += share * cy
         total[i, 2] += share * cz
-        total[j, 0] -= (1.0 - share) * cx
-        total[j, 1] -= (1.0 - share) * cy
-        total[j, 2] -= (1.0 - share) * cz
-        count[i] += 1.0
-        count[j] += 1.0
+        total[i, 3] += 1.0
+        total[j, 0] += rest * cx
+        total[j, 1] += rest * cy
+        total[j, 2] += rest * cz
+        total[j, 3] += 1.0
     relaxation = coefficients[RELAXATION]
     for i in range(n):
-        if count[i] > 0.0:
-            scale = relaxation / count[i]
-            for a in range(3):
-                predicted[b, i, a] += total[i, a] * scale
+        if total[i, 3] > 0.0:
+            scale = relaxation / total[i, 3]
+            now[i, 0] += total[i, 0] * scale
+            now[i, 1] += total[i, 1] * scale
+            now[i, 2] += total[i, 2] * scale
 
 
 @nb.njit(**_JIT)
 def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, box_centers, box_rotations,
-             box_halves, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
-             wall_rotations, wall_halves, coefficients):  # type: ignore[no-untyped-def]
+             box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
+             wall_rotations, wall_halves, wall_bounds, coefficients):  # type: ignore[no-untyped-def]
     """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
-    tool (its pose p0, r0 at the sub-step's start, p1, r1 at its end), then the static surfaces
-    (ground, walls, ground again), which win. Updates ``predicted[b]`` in place."""
+    ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
+    at its end), then the walls and the ground again without friction, so that static surfaces
+    win. Updates ``predicted[b]`` in place."""
     n = predicted.shape[1]
     radius = coefficients[RADIUS]
     if n_pairs[b]:
         _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients)
-    start, end, moved, extra = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    start, end, moved, scratch = np.empty(3), np.empty(3), np.empty(3), np.empty(18)
+    # Static surfaces with friction before the tool (so friction never drags a sphere into it) ...
+    mu_s, mu_k = coefficients[MU_GROUND_S], coefficients[MU_GROUND_K]
+    for i in range(n):
+        depth = radius - predicted[b, i, 2]
+        if depth > 0.0:
+            predicted[b, i, 2] = radius
+            fx, fy, fz = _friction(predicted[b, i, 0] - previous[b, i, 0], predicted[b, i, 1] - previous[b, i, 1],
+                                   predicted[b, i, 2] - previous[b, i, 2], 0.0, 0.0, 1.0, depth, mu_s, mu_k)
+            predicted[b, i, 0] += fx
+            predicted[b, i, 1] += fy
+    _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius,
+                coefficients[MU_WALL_S], coefficients[MU_WALL_K], start, end, moved, scratch)
     if has_tool:
         mu_s, mu_k = coefficients[MU_TOOL_S], coefficients[MU_TOOL_K]
         for i in range(n):
@@ -202,14 +225,13 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
                     outside = True
             if outside:
                 continue
-            _boxes_correction(start, end, box_centers, box_rotations, box_halves, radius, mu_s, mu_k, moved)
+            _boxes_correction(start, end, box_centers, box_rotations, box_halves, box_bounds, radius, mu_s, mu_k, moved,
+                              scratch)
             for a in range(3):
                 end[a] += moved[a]
             # Capsules (handles): closest-point contact, pushes summed, friction averaged.
             touching = 0
-            for a in range(3):
-                extra[a] = 0.0
-            fsum = np.zeros(3)
+            ex, ey, ez, gx, gy, gz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
             for k in range(capsule_radii.shape[0]):
                 ax = capsule_ends[k, 0] - capsule_starts[k, 0]
                 ay = capsule_ends[k, 1] - capsule_starts[k, 1]
@@ -230,37 +252,36 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
                 nx, ny, nz = ox * inv, oy * inv, oz * inv
                 fx, fy, fz = _friction(end[0] + nx * depth - start[0], end[1] + ny * depth - start[1],
                                        end[2] + nz * depth - start[2], nx, ny, nz, depth, mu_s, mu_k)
-                extra[0] += nx * depth
-                extra[1] += ny * depth
-                extra[2] += nz * depth
-                fsum[0] += fx
-                fsum[1] += fy
-                fsum[2] += fz
-            for a in range(3):
-                moved[a] += extra[a] + fsum[a] / max(touching, 1)
+                ex, ey, ez = ex + nx * depth, ey + ny * depth, ez + nz * depth
+                gx, gy, gz = gx + fx, gy + fy, gz + fz
+            share = 1.0 / max(touching, 1)
+            moved[0] += ex + gx * share
+            moved[1] += ey + gy * share
+            moved[2] += ez + gz * share
             for c in range(3):
                 predicted[b, i, c] += r1[b, c, 0] * moved[0] + r1[b, c, 1] * moved[1] + r1[b, c, 2] * moved[2]
 
-    # Static surfaces last: the ground (with friction), the walls, then the ground's hard limit.
-    mu_s, mu_k = coefficients[MU_GROUND_S], coefficients[MU_GROUND_K]
-    for i in range(n):
-        depth = radius - predicted[b, i, 2]
-        if depth > 0.0:
-            predicted[b, i, 2] = radius
-            fx, fy, fz = _friction(predicted[b, i, 0] - previous[b, i, 0], predicted[b, i, 1] - previous[b, i, 1],
-                                   predicted[b, i, 2] - previous[b, i, 2], 0.0, 0.0, 1.0, depth, mu_s, mu_k)
-            predicted[b, i, 0] += fx
-            predicted[b, i, 1] += fy
-    if wall_centers.shape[0]:
-        mu_s, mu_k = coefficients[MU_WALL_S], coefficients[MU_WALL_K]
-        for i in range(n):
-            for a in range(3):
-                start[a], end[a] = previous[b, i, a], predicted[b, i, a]
-            if _boxes_correction(start, end, wall_centers, wall_rotations, wall_halves, radius, mu_s, mu_k, moved):
-                for a in range(3):
-                    predicted[b, i, a] += moved[a]
+
+    # ... and their normal constraints after it: the walls, then the ground's hard limit, win.
+    _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, 0.0, 0.0,
+                start, end, moved, scratch)
     for i in range(n):
         predicted[b, i, 2] = max(predicted[b, i, 2], radius)
+
+
+@nb.njit(**_INLINE)
+def _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k,
+                start, end, moved, scratch):  # type: ignore[no-untyped-def]
+    """Contacts of instance b's spheres with the walls (friction mu_s, mu_k), in place."""
+    if wall_centers.shape[0] == 0:
+        return
+    for i in range(predicted.shape[1]):
+        for a in range(3):
+            start[a], end[a] = previous[b, i, a], predicted[b, i, a]
+        if _boxes_correction(start, end, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k,
+                             moved, scratch):
+            for a in range(3):
+                predicted[b, i, a] += moved[a]
 
 
 @nb.njit(**_JIT)
@@ -337,8 +358,8 @@ def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: i
 
 @nb.njit(**_JIT)
 def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, first_substep, h, has_tool,
-            path_positions, path_rotations, box_centers, box_rotations, box_halves, capsule_starts, capsule_ends,
-            capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, coefficients,
+            path_positions, path_rotations, box_centers, box_rotations, box_halves, box_bounds, capsule_starts, capsule_ends,
+            capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, wall_bounds, coefficients,
             freeze_after):  # type: ignore[no-untyped-def]
     """Sub-steps ``first_substep`` .. S-1 of length h (s) for all instances, the tool moving along
     ``path_positions`` (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3). Updates the state arrays in
@@ -361,8 +382,8 @@ def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, f
                 for a in range(3):
                     predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
             _project(b, positions, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, box_centers, box_rotations,
-                     box_halves, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
-                     wall_rotations, wall_halves, coefficients)
+                     box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
+                     wall_rotations, wall_halves, wall_bounds, coefficients)
             awake_any = False
             for i in range(n):
                 dx = predicted[b, i, 0] - positions[b, i, 0]
@@ -388,8 +409,8 @@ def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, f
 
 @nb.njit(**_JIT)
 def place(positions, built_at, pairs, n_pairs, iterations, tool_position, tool_rotation, box_centers, box_rotations,
-          box_halves, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers, wall_rotations,
-          wall_halves, coefficients):  # type: ignore[no-untyped-def]
+          box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers, wall_rotations,
+          wall_halves, wall_bounds, coefficients):  # type: ignore[no-untyped-def]
     """``iterations`` position-only passes over all contacts with the tool still at its pose
     (B, 3), (B, 3, 3). Returns False if ``pairs`` proved too small (grow it and call again)."""
     predicted = positions.copy()
@@ -398,7 +419,7 @@ def place(positions, built_at, pairs, n_pairs, iterations, tool_position, tool_r
             return False
         for b in range(positions.shape[0]):
             _project(b, positions, predicted, pairs, n_pairs, True, tool_position, tool_rotation, tool_position,
-                     tool_rotation, box_centers, box_rotations, box_halves, capsule_starts, capsule_ends,
-                     capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, coefficients)
+                     tool_rotation, box_centers, box_rotations, box_halves, box_bounds, capsule_starts, capsule_ends,
+                     capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, wall_bounds, coefficients)
         positions[...] = predicted
     return True
