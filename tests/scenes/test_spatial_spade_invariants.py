@@ -7,6 +7,7 @@ from ``../shared/data/video_demos`` (skipped, with the reason, when that directo
 
 from __future__ import annotations
 
+import itertools
 import os
 from pathlib import Path
 
@@ -87,7 +88,7 @@ def test_blade_pressed_face_down_10_cm_into_the_floor_at_2_m_s() -> None:
     keys = [start, start * [1, 1, 0] + [0, 0, -0.1], start * [1, 1, 0] + [0, 0.25, -0.1], [0.0, 0.15, 0.3]]
     positions = [keys[0]]
     step = 2.0 * scene.control_dt
-    for a, b in zip(keys[:-1], keys[1:]):
+    for a, b in itertools.pairwise(keys):
         count = int(np.ceil(np.linalg.norm(np.subtract(b, a)) / step))
         positions += [a + (np.subtract(b, a)) * (k / count) for k in range(1, count + 1)]
     motion = ToolPose(np.array(positions), np.repeat(rotation[None], len(positions), 0))

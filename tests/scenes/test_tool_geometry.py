@@ -63,7 +63,6 @@ def test_handle_reaches_beyond_the_handle_end_and_head_starts_at_the_head_point(
 
 
 def test_spade_blade_rim_and_handle_dimensions() -> None:
-    spec = tool_spec("spade")
     boxes = {b.name: b for b in tool_boxes("spade")}
     blade = boxes["blade"]
     assert tool_boxes("spade")[0].name == "blade"

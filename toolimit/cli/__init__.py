@@ -11,7 +11,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.trajopt", "toolimit.cli.export")
+COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.trajopt", "toolimit.cli.export", "toolimit.cli.replay")
 
 
 class CliError(Exception):

@@ -78,7 +78,12 @@ from toolimit.scenes.spatial.particles import (
     ParticleWorld,
     StaticBoxes,
 )
-from toolimit.scenes.spatial.tool_geometry import SPADE_BLADE_LENGTH, SPADE_BLADE_WIDTH, SPADE_RIM_HEIGHT, tool_shapes
+from toolimit.scenes.spatial.tool_geometry import (
+    SPADE_BLADE_LENGTH,
+    SPADE_BLADE_WIDTH,
+    SPADE_RIM_HEIGHT,
+    tool_shapes,
+)
 from toolimit.tools import ToolPose, rotation_z
 
 #: Half side of the square region (m, world x and y) where scene elements may stand.
