@@ -35,6 +35,7 @@ def run_scoop(scene: SpatialSpadeScene, seed: int, batch_size: int) -> None:
     motion = scripted_scoop(PARAMS)
     for position, rotation in zip(motion.position, motion.rotation):
         scene.step(ToolPose(position, rotation))
+        assert np.all(scene.static_penetration() <= 1e-3), "no sphere 1 mm into the ground or a wall"
 
 
 @pytest.fixture(scope="module")

@@ -49,6 +49,8 @@ def assert_static_surfaces_win(scene: SpatialSpadeScene, step: int) -> None:
     outside = np.maximum(np.abs(local) - walls.half_extents, 0.0)
     distance = np.linalg.norm(outside, axis=-1)
     assert distance.min() >= R - TOLERANCE, f"a sphere is {R - distance.min():.4f} m into a wall at step {step}"
+    assert np.all(scene.static_penetration() <= TOLERANCE)
+    assert scene.static_penetration() == pytest.approx(np.maximum(R - np.minimum(positions[..., 2], distance.min(-1)).min(1), 0.0))
 
 
 def run_checked(scene: SpatialSpadeScene, motion: ToolPose) -> list[float]:

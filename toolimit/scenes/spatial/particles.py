@@ -313,17 +313,18 @@ class ParticleWorld:
         """
         h = duration / substeps
         b = self.batch_size
-        has_tool = self.tool is not None and self.tool_position is not None
+        start_position, start_rotation = self.tool_position, self.tool_rotation
+        has_tool = self.tool is not None and start_position is not None and start_rotation is not None
         if has_tool:
-            end_position = self.tool_position if position is None else np.asarray(position, dtype=float)
-            end_rotation = self.tool_rotation if rotation is None else np.asarray(rotation, dtype=float)
+            assert start_position is not None and start_rotation is not None
+            end_position = start_position if position is None else np.asarray(position, dtype=float)
+            end_rotation = start_rotation if rotation is None else np.asarray(rotation, dtype=float)
             if position is None and rotation is None:
-                path_positions = np.broadcast_to(self.tool_position, (substeps + 1, b, 3))
-                path_rotations = np.broadcast_to(self.tool_rotation, (substeps + 1, b, 3, 3))
+                path_positions = np.broadcast_to(start_position, (substeps + 1, b, 3))
+                path_rotations = np.broadcast_to(start_rotation, (substeps + 1, b, 3, 3))
             else:
                 path_positions, path_rotations = interpolate_poses(
-                    self.tool_position, self.tool_rotation, end_position, end_rotation,
-                    np.linspace(0.0, 1.0, substeps + 1),
+                    start_position, start_rotation, end_position, end_rotation, np.linspace(0.0, 1.0, substeps + 1)
                 )
             self.tool_position = np.ascontiguousarray(end_position).copy()
             self.tool_rotation = np.ascontiguousarray(end_rotation).copy()

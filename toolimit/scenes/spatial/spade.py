@@ -297,7 +297,7 @@ class SpatialSpadeScene:
 
     # --------------------------------------------------------------------------------- lifecycle
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """B instances: walls at ``params``, each pile jittered by ``rng`` then settled; no spade yet."""
+        """B instances: walls at ``params``, the cached heap shifted by ``rng`` per instance; no spade yet."""
         batch_size = check_reset(self, params, batch_size)
         b = self.batch_size = batch_size
         self.sand_position = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
@@ -379,6 +379,20 @@ class SpatialSpadeScene:
             & (np.abs(local[..., 1]) < SPADE_BLADE_WIDTH / 2) & (local[..., 2] > 0.0)
             & (local[..., 2] < SPADE_BLADE_LENGTH)
         )
+
+    def static_penetration(self) -> np.ndarray:
+        """(B,) deepest penetration (m) of a sphere into the ground or a wall, 0 if none.
+
+        The solver keeps it at 0 (static surfaces win, module docstring); a diagnostic for tests
+        and benchmarks.
+        """
+        positions = self._require_reset().positions
+        walls = self.walls
+        local = np.einsum("bnkj,kja->bnka", positions[:, :, None] - walls.centers, walls.rotations)
+        outside = np.linalg.norm(np.maximum(np.abs(local) - walls.half_extents, 0.0), axis=-1)
+        radius = self.material.radius
+        deepest = np.maximum(radius - positions[..., 2], radius - outside.min(axis=-1))
+        return np.maximum(deepest.max(axis=1), 0.0)
 
     def goal_reward(self) -> np.ndarray:
         """(B,) number of spheres in the goal box."""
