@@ -66,7 +66,7 @@ Tool capsules (handles) use the closest-point contact only: crossing one needs a
 r + capsule radius per sub-step (8.6 m/s at 240 Hz for the spade handle).
 
 The loops are compiled by numba (:mod:`toolimit.scenes.spatial.particle_kernels`, cached on disk):
-at 200 spheres a batch of 16 instances steps about 3,000 instance control steps per CPU second on
+at 200 spheres a batch of 16 instances steps about 2,900 instance control steps per CPU second on
 one core, against 600 for the former vectorised numpy version (``benchmarks/spatial_scene_speed.py``).
 Results are deterministic on one machine (same inputs, same numbers).
 
