@@ -1,17 +1,20 @@
 """Speed of the 3D scenes on one core: control steps per second and one alignment sample.
 
 Run: ``python benchmarks/spatial_scene_speed.py [--repeats 3]``. Prints, for the spade world with
-50 and 100 spheres at B = 1 and B = 10, control steps per second (24 Hz steps, each 10 physics
-sub-steps) over a scripted scoop-carry-tip motion, and the time of one alignment sample: 10 replays
-of a 92-frame demonstration as one B = 10 batch (reset + 92 steps + reward). The demonstration is
-the paper authors' aligned spade trajectory (``../shared/data/video_demos``) when present, else
-the first 92 frames of the scripted scoop. The hammer and scythe worlds are timed on a generic
-circular sweep when they exist.
+its default 200 spheres (and 50 for comparison) at B = 1 and B = 16, instance control steps per
+CPU second (24 Hz steps, each 10 physics sub-steps; B instances stepped together count B) over a
+scripted scoop-carry-tip motion, and the time of one alignment sample: 10 replays of a 92-frame
+demonstration as one B = 10 batch (reset + 92 steps + reward). The demonstration is the paper
+authors' aligned spade trajectory (``../shared/data/video_demos``) when present, else the first 92
+frames of the scripted scoop. The hammer and scythe worlds are timed on a generic circular sweep.
 
 Every figure is the minimum over ``--repeats`` runs, as wall time and as this process's CPU time
 (the machine may be shared: the minimum is the least disturbed run, and CPU time excludes waiting).
-Reference (the task brief): MuJoCo on an equivalent scene ~5,000 physics steps/s and ~2 s per
-10-replay sample; target here: under 1 s per sample with 50 spheres.
+The first run compiles the particle kernels if numba's cache is cold; a warm-up replay before the
+timings keeps that out of the figures. Targets (issue 9): >= 2,000 instance steps per CPU second at
+200 spheres, B = 16, on one core (learning steps this world a million times), and under 1 s per
+10-replay sample. Last, the same motions are replayed untimed to print the deepest penetration of a
+sphere into the ground or a wall over every step (the solver keeps it at 0).
 """
 
 from __future__ import annotations
@@ -94,9 +97,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3, help="runs per figure; the minimum is reported")
     args = parser.parse_args()
     scoop = scripted_scoop(SCOOP_PARAMS)
+    replay(SpatialSpadeScene(), SCOOP_PARAMS, ToolPose(scoop.position[:5], scoop.rotation[:5]), 1)  # warm-up
     print(f"spade world, scripted scoop-carry-tip ({len(scoop.position)} control steps), min of {args.repeats} runs:")
-    for n_spheres in (50, 100):
-        for batch in (1, 10):
+    for n_spheres in (200, 50):
+        for batch in (1, 16):
             scene = SpatialSpadeScene(n_spheres=n_spheres)
             wall, cpu = [], []
             for _ in range(args.repeats):
@@ -104,11 +108,9 @@ def main() -> None:
                 seconds, cpu_seconds, _ = best_of(1, lambda: step_through(scene, scoop))
                 wall.append(seconds)
                 cpu.append(cpu_seconds)
-            steps, cpu_steps = len(scoop.position) / min(wall), len(scoop.position) / min(cpu)
-            physics = batch * scene.substeps
-            print(f"  N={n_spheres:3d} B={batch:2d}: {steps:6.1f} control steps/s wall, {cpu_steps:6.1f} per CPU s; "
-                  f"instance physics steps/s: {steps * physics:6.0f} wall, {cpu_steps * physics:6.0f} per CPU s "
-                  f"(goal reward {scene.goal_reward().mean():.1f})")
+            steps = len(scoop.position) * batch
+            print(f"  N={n_spheres:3d} B={batch:2d}: {steps / min(cpu):6.0f} instance steps per CPU s "
+                  f"({steps / min(wall):6.0f} per wall s; goal reward mean {scene.goal_reward().mean():.1f})")
 
     demos = [("scripted scoop, first 92 frames", ToolPose(scoop.position[:92], scoop.rotation[:92]), SCOOP_PARAMS)]
     real = real_spade_demo()
@@ -116,11 +118,20 @@ def main() -> None:
         print(f"  (real spade demonstration not found at {REAL_SPADE}: skipped)")
     else:
         demos.insert(0, ("authors' aligned spade video 1 (92 frames)", real[0], real[1]))
-    print("alignment sample = 10 replays as one B = 10 batch (reset + 92 steps + reward), 50 spheres:")
+    print("alignment sample = 10 replays as one B = 10 batch (reset + 92 steps + reward), 200 spheres:")
     for label, motion, params in demos:
-        scene = SpatialSpadeScene(n_spheres=50)
+        scene = SpatialSpadeScene()
         seconds, cpu_seconds, reward = best_of(args.repeats, lambda: replay(scene, params, motion, 10))
         print(f"  {label}: {seconds:.2f} s wall, {cpu_seconds:.2f} s CPU (mean goal reward {np.mean(reward):.1f})")
+    print("static surfaces win: deepest sphere penetration into the ground or a wall over every step (B = 10):")
+    for label, motion, params in demos + [("scripted scoop, whole", scoop, SCOOP_PARAMS)]:
+        scene = SpatialSpadeScene()
+        scene.reset(params, np.random.default_rng(0), 10)
+        deepest = 0.0
+        for position, rotation in zip(motion.position, motion.rotation):
+            scene.step(ToolPose(position, rotation))
+            deepest = max(deepest, float(scene.static_penetration().max()))
+        print(f"  {label}: {1000 * deepest:.3f} mm")
 
     for tool in ("hammer", "scythe"):
         try:

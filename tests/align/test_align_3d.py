@@ -2,10 +2,10 @@
 
 Only one 3D spade sample in a few hundred earns a reward (benchmarks/alignment_3d.py: the first
 candidate of the shipped spade demos comes after 99 to 812 samples from seed 0), and each replay
-simulates 50 sand spheres at 240 Hz, too much for a unit test's budget on a shared machine. The
-search's outcome depends only on (seed, sample index), so the test uses a seed whose second
-sample is a candidate: SEED was found by scanning seeds 0..14 with CONFIG on
-data/demos/spade_00.npz. If the sampler or the spade world changes, that sample may stop scoring
+simulates 200 sand spheres at 240 Hz, too much for a unit test's budget on a shared machine. The
+search's outcome depends only on (seed, sample index), so the test uses a seed whose first
+sample is a candidate: SEED was found by scanning seeds from 0 with CONFIG on
+data/demos/spade_00.npz (re-picked when the spade world became the authors' scene, issue 9). If the sampler or the spade world changes, that sample may stop scoring
 and the tests fail: re-pick SEED by scanning seeds with CONFIG.
 """
 
@@ -19,10 +19,10 @@ from toolimit.align.sampler import draw_alignment_sample
 from toolimit.align.search import AlignmentResult, align
 from toolimit.demos import clean_demo, load_demo
 from toolimit.scenes.registry import make_scene
-from toolimit.scenes.spatial.spade import GOAL_INNER, GOAL_WALL_HEIGHT
+from toolimit.scenes.spatial.spade import GOAL_INNER, GOAL_REGION_HEIGHT
 from toolimit.viz.meshcat_views import replay_scene
 
-SEED = 12
+SEED = 0
 # chunk_size 1: with two workers the three samples are spread over both processes.
 CONFIG = AlignmentConfig(samples=3, candidates=1, replays=3, chunk_size=1)
 
@@ -69,7 +69,7 @@ def test_tiny_3d_search_finds_a_candidate_with_sand_in_the_goal_box(one_worker):
     _, _, poses = result.aligned_motion(candidate)
     final = replay_scene(scene, poses, candidate.sample.params, rng)[-1]
     offset = final["sphere_positions"] - np.asarray(candidate.sample.params["goal_position"]) * [1.0, 1.0, 0.0]
-    inside = (np.abs(offset[:, :2]) < GOAL_INNER / 2).all(axis=1) & (offset[:, 2] < GOAL_WALL_HEIGHT)
+    inside = (np.abs(offset[:, :2]) < GOAL_INNER / 2).all(axis=1) & (offset[:, 2] >= 0) & (offset[:, 2] <= GOAL_REGION_HEIGHT)
     assert inside.sum() > 0
     assert inside.sum() == final["in_box"]
 

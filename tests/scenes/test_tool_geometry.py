@@ -13,6 +13,8 @@ from toolimit.scenes.spatial.shapes import (
     posed_tool_shapes,
 )
 from toolimit.scenes.spatial.tool_geometry import (
+    SPADE_BLADE_LENGTH,
+    SPADE_BLADE_WIDTH,
     SPADE_RIM_HEIGHT,
     tool_boxes,
     tool_shapes,
@@ -61,19 +63,19 @@ def test_handle_reaches_beyond_the_handle_end_and_head_starts_at_the_head_point(
 
 
 def test_spade_blade_rim_and_handle_dimensions() -> None:
-    spec = tool_spec("spade")
     boxes = {b.name: b for b in tool_boxes("spade")}
     blade = boxes["blade"]
     assert tool_boxes("spade")[0].name == "blade"
     # Carrying face is the plane x = 0 with the plate behind it (x < 0).
     assert blade.center[0] + blade.half_extents[0] == pytest.approx(0.0)
-    assert 2 * blade.half_extents[1] == pytest.approx(spec.head_width)
-    assert 0.20 <= 2 * blade.half_extents[2] <= 0.25
+    # The original scene's blade: about 0.17 m across by 0.12 m along the tool (tool_geometry docstring).
+    assert 2 * blade.half_extents[1] == pytest.approx(SPADE_BLADE_WIDTH) == pytest.approx(0.17)
+    assert 2 * blade.half_extents[2] == pytest.approx(SPADE_BLADE_LENGTH) == pytest.approx(0.12)
     for name in ("rim_left", "rim_right", "rim_back"):
         rim = boxes[name]
         assert rim.center[0] + rim.half_extents[0] == pytest.approx(SPADE_RIM_HEIGHT), "rims stand on the +x face"
     assert boxes["rim_left"].center[1] > 0 > boxes["rim_right"].center[1]
-    assert boxes["rim_back"].center[2] > spec.head_length / 2, "the back rim is on the handle side; the tip is open"
+    assert boxes["rim_back"].center[2] > SPADE_BLADE_LENGTH / 2, "the back rim is on the handle side; the tip is open"
     handle = tool_shapes("spade").capsules[0]
     start, end = handle.endpoints
     total = end[2] + handle.radius - (boxes["socket"].center[2] - boxes["socket"].half_extents[2])

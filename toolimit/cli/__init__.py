@@ -11,8 +11,8 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.trajopt", "toolimit.cli.export",
-            "toolimit.cli.learn", "toolimit.cli.evaluate", "toolimit.cli.run")
+COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.replay", "toolimit.cli.trajopt",
+            "toolimit.cli.export", "toolimit.cli.learn", "toolimit.cli.evaluate", "toolimit.cli.run")
 
 
 class CliError(Exception):

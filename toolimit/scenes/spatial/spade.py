@@ -1,27 +1,56 @@
 """The 3D spade world: scoop sand from a deposit and drop it into a goal box.
 
-World frame: metres, z up, ground z = 0. Following the paper's PhysX scene (kzorina/pyphysx_envs,
-``scenes/SpadeTaskScene.py``):
+World frame: metres, z up, ground z = 0. The scene is the original experiments' PhysX scene
+(``../shared/reference/AUTHORS_SETUP.md``; kzorina/pyphysx_envs ``SpadeTaskScene``):
 
-* the **sand deposit** is a 0.4 m x 0.4 m three-walled pen (walls 0.1 m high, 1 cm thick) whose
+* the **sand deposit** is a 0.4 m x 0.4 m three-walled pen (walls 7 cm high, 1 cm thick) whose
   centre is the parameter ``sand_position`` and whose frame is turned by ``sand_yaw`` about z; in
   that frame the walls stand at x = -+0.2 m and at y = -0.2 m, and the side y = +0.2 m is open;
-* the **goal box** is an open-top square box of inner side ``GOAL_INNER`` (0.4 m) with walls
-  ``GOAL_WALL_HEIGHT`` (0.1 m) high, axis-aligned, centred at ``goal_position``; the ground is its
+* the **goal box** is an open-top square box of inner side ``GOAL_INNER`` (0.5 m) with walls
+  ``GOAL_WALL_HEIGHT`` (7 cm) high, axis-aligned, centred at ``goal_position``; the ground is its
   floor;
-* ``n_spheres`` (30-100, default 50) sand spheres of radius 2 cm start as a settled pile in the
-  middle of the deposit: two square-lattice layers, the upper one in the hollows of the lower (see
-  :func:`pile_lattice`), with a seeded horizontal jitter per instance (the instances' own
-  randomness), settled for ``SETTLE_TIME`` seconds at reset; after that the pile is at rest;
-* the spade is kinematic; the sand follows :mod:`toolimit.scenes.spatial.particles`.
+* ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap** at rest: as in the
+  original, dropped once from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of
+  height), simulated to rest and cached (:func:`settled_heap`), then moved to the deposit at
+  every reset, each instance shifted by its own seeded offset of up to +-2 cm in x and y (the
+  instances' own randomness; a shifted heap is still at rest);
+* the sand (:data:`AUTHORS_SAND`): spheres that do not rotate (the original damps their rotation),
+  sphere-sphere friction 5, sphere-spade and sphere-ground 2.5 (PhysX averages 5 with the spade's
+  and the ground's 0.1), sphere-wall 3 (average of 5 and 1), speed capped at 1 m/s, 240 Hz (10
+  sub-steps per 24 Hz control step);
+* the spade is kinematic (:mod:`toolimit.scenes.spatial.tool_geometry`): a 0.12 m x 0.17 m blade
+  with a 5 cm rim on both sides and the back; the sand follows
+  :mod:`toolimit.scenes.spatial.particles`, in which the ground and the walls win against the
+  spade: a sphere squeezed between them leaves sideways or over the blade.
 
-Rewards. The goal reward is the number of sphere centres inside the goal box (within its inner
-square, below its walls' top). The dense reward is the shaping of the paper's code
-(``SpadeTaskScene.get_environment_rewards``): 0.1 per sphere in the box, + 0.01 per sphere on the
-spade's blade (``on_spade_reward_weight``; the original's examples use 0.01), - 0.01 per sphere
-"outside" (neither in the box nor within 0.4 m horizontally of the deposit centre below 0.3 m
-height: ``out_of_box_sphere_reward``). Success (the paper): at least 10 spheres in the box for at
-least half of the control steps so far.
+Differences from the original, each measured (authors' aligned spade motions
+``spade_video1_aligned`` / ``spade_example_aligned``, converted by
+``toolimit.trajopt.from_original_spade_tip``, replayed tool-only 10 times in their own scene
+parameters, mean final goal reward):
+
+* the heap is dropped into a closed 0.36 m square pen: dropped freely it spreads to 0.23 m from
+  its centre, beyond the deposit's 0.2 m half side;
+* the blade is a box with a rim, not the original mesh; its "about 0.17 m x 0.12 m" is read as
+  0.17 m across and 0.12 m along the handle (the other reading carries less: 6.8 / 5.3 against
+  9.3 / 7.8), and the rim's 5 cm height stands for the dish of a real blade (3 cm: 4.0 / 7.6;
+  4 cm: 8.1 / 9.8; 6 cm: 7.1 / 6.6; 5 cm: 9.3 / 7.8, measured with the solver's first ordering;
+  8.4 / 8.1 with the final one);
+* friction is Coulomb friction by position (particles module); its coefficients are the
+  original's. They keep the load of a blade tilted as the real recordings tilt it: carrying from
+  the deposit towards the box (tip above 10 cm, outside the box's square), the blade's face is at
+  most 36 degrees from level in ``spade_video1_aligned`` (frames 39-58, mostly a sideways roll) and
+  11 degrees in ``spade_example_aligned``; sand on the blade holds up to atan(2.5) = 68 degrees,
+  and the recording empties the blade by rolling it to 103 degrees over the box (frames 84-91)
+  (``tests/scenes/test_spatial_spade_invariants.py`` measures the tilt and checks a loaded blade
+  at that tilt keeps its load).
+
+Rewards. The goal reward is the number of sphere centres in the goal region: within the box's
+inner square (+-0.25 m in x and y around its centre) and 0 <= z <= 0.1 m. The dense reward is the
+shaping of the paper's code (``SpadeTaskScene.get_environment_rewards``): 0.1 per sphere in the
+box, + 0.01 per sphere on the spade's blade (``on_spade_reward_weight``; the original's examples
+use 0.01), - 0.01 per sphere "outside" (neither in the box nor within 0.4 m horizontally of the
+deposit centre below 0.3 m height: ``out_of_box_sphere_reward``). Success (the paper): at least 10
+spheres in the box for at least half of the control steps so far.
 
 Parameters must keep the deposit and the box apart (their ground rectangles must not overlap) and
 inside the world bound ``WORLD_HALF_SIZE`` (5 m) in x and y; both stand on the ground (the z of
@@ -30,6 +59,8 @@ spade motion for given parameters (tests, benchmarks, notebooks).
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -47,29 +78,49 @@ from toolimit.scenes.spatial.particles import (
     ParticleWorld,
     StaticBoxes,
 )
-from toolimit.scenes.spatial.tool_geometry import SPADE_RIM_HEIGHT, tool_shapes
-from toolimit.tools import ToolPose, rotation_z, tool_spec
+from toolimit.scenes.spatial.tool_geometry import (
+    SPADE_BLADE_LENGTH,
+    SPADE_BLADE_WIDTH,
+    SPADE_RIM_HEIGHT,
+    tool_shapes,
+)
+from toolimit.tools import ToolPose, rotation_z
 
 #: Half side of the square region (m, world x and y) where scene elements may stand.
 WORLD_HALF_SIZE = 5.0
 #: Inner side of the square sand deposit (m), its wall height and thickness (m).
 DEPOSIT_INNER = 0.4
-DEPOSIT_WALL_HEIGHT = 0.1
+DEPOSIT_WALL_HEIGHT = 0.07
 #: Inner side of the goal box (m), its wall height (m).
-GOAL_INNER = 0.4
-GOAL_WALL_HEIGHT = 0.1
+GOAL_INNER = 0.5
+GOAL_WALL_HEIGHT = 0.07
+#: Goal-reward region: sphere centres within the box's inner square and 0 <= z <= this height (m).
+GOAL_REGION_HEIGHT = 0.1
 #: Wall thickness of the deposit and the goal box (m).
 WALL_THICKNESS = 0.01
 #: Spheres in the box needed at a step for it to count towards success, and the fraction of steps.
 SUCCESS_SPHERES = 10
 SUCCESS_FRACTION = 0.5
-#: Seconds of simulation at reset that let the jittered lattice pile settle.
-SETTLE_TIME = 0.25
-#: Horizontal gap (m) between neighbouring spheres of the initial lattice (jitter is +- half of it).
-LATTICE_GAP = 0.002
+#: The heap: spheres dropped one every HEAP_DROP_SPACING m in height from a column with
+#: horizontal N(0, HEAP_DROP_SIGMA) m offsets into a closed square pen of inner side HEAP_PEN, and
+#: simulated to rest; each instance then shifts it by up to +-(DEPOSIT_INNER - HEAP_PEN) / 2 in x and y.
+HEAP_DROP_SIGMA = 0.05
+HEAP_DROP_SPACING = 0.1
+HEAP_PEN = 0.36
+#: Largest sphere count of a scene.
+MAX_SPHERES = 400
+#: Most control steps the heap drop may take to come to rest.
+HEAP_MAX_STEPS = 2400
 #: Dense reward weights and the deposit region of the paper's code (see the module docstring).
 DENSE_IN_BOX, DENSE_ON_SPADE, DENSE_OUTSIDE = 0.1, 0.01, -0.01
 DEPOSIT_REGION_RADIUS, DEPOSIT_REGION_HEIGHT = 0.4, 0.3
+#: The sand of the original scene (module docstring): 2 cm spheres that hardly roll (sphere-sphere
+#: friction 5), PhysX-averaged sphere-spade and sphere-ground friction 2.5, sphere-wall 3, speed
+#: capped at 1 m/s.
+AUTHORS_SAND = GranularMaterial(
+    radius=0.02, mu_static=5.0, mu_kinetic=5.0, tool_mu_static=2.5, tool_mu_kinetic=2.5,
+    ground_mu_static=2.5, ground_mu_kinetic=2.5, wall_mu_static=3.0, wall_mu_kinetic=3.0, max_speed=1.0,
+)
 
 
 def _walls(inner: float, height: float, sides: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -89,26 +140,30 @@ def _walls(inner: float, height: float, sides: tuple[str, ...]) -> tuple[np.ndar
     return np.array(centers), np.array(halves)
 
 
-def pile_lattice(n_spheres: int, radius: float, gap: float = LATTICE_GAP) -> np.ndarray:
-    """(n_spheres, 3) centres of a two-layer pile on the ground around the origin, metres.
+@functools.lru_cache(maxsize=8)
+def settled_heap(n_spheres: int, material: GranularMaterial, substeps: int = 10) -> np.ndarray:
+    """(n_spheres, 3) centres of a heap at rest around the origin on the ground, metres (cached).
 
-    The base is the smallest m x m square lattice (spacing 2 r + gap) such that it and the
-    (m-1) x (m-1) layer resting in its hollows (1 mm above touching) hold all spheres; the base is
-    filled first, the upper layer from its centre outwards. Two layers stay put: steeper piles
-    would slump (their 45-degree faces exceed the 31-degree angle of repose).
+    As the original scene builds its pile: spheres dropped one every ``HEAP_DROP_SPACING`` m in
+    height from a column with N(0, ``HEAP_DROP_SIGMA``) horizontal offsets (seed 0), simulated
+    until every sphere rests, here inside a closed pen of inner side ``HEAP_PEN`` so that the heap
+    fits the deposit. Raises RuntimeError if it does not come to rest.
     """
-    spacing = 2.0 * radius + gap
-    rise = np.sqrt((2.0 * radius) ** 2 - spacing**2 / 2.0) + 0.001
-    size = 1
-    while size * size + (size - 1) ** 2 < n_spheres:
-        size += 1
-    layers = []
-    for level, m in enumerate((size, size - 1)):
-        coords = (np.arange(m) - (m - 1) / 2) * spacing
-        x, y = np.meshgrid(coords, coords, indexing="ij")
-        layer = np.stack([x.ravel(), y.ravel(), np.full(m * m, radius + level * rise)], axis=-1)
-        layers.append(layer[np.argsort(np.hypot(layer[:, 0], layer[:, 1]), kind="stable")])
-    return np.concatenate(layers)[:n_spheres]
+    rng = np.random.default_rng(0)
+    start = np.column_stack([
+        np.clip(rng.normal(0.0, HEAP_DROP_SIGMA, (n_spheres, 2)), -HEAP_PEN / 2 + material.radius,
+                HEAP_PEN / 2 - material.radius),
+        material.radius + 0.01 + HEAP_DROP_SPACING * np.arange(n_spheres),
+    ])
+    centers, halves = _walls(HEAP_PEN, 2 * material.radius * n_spheres, ("-x", "+x", "-y", "+y"))
+    pen = StaticBoxes(centers, np.repeat(np.eye(3)[None], 4, 0), halves)
+    world = ParticleWorld(material, pen, None)
+    world.reset(start[None])
+    for step in range(HEAP_MAX_STEPS):
+        world.advance(1.0 / CONTROL_FPS, substeps)
+        if step > CONTROL_FPS and world.kinetic_energy()[0] == 0.0:
+            return world.positions[0].copy()
+    raise RuntimeError(f"the heap of {n_spheres} spheres did not come to rest in {HEAP_MAX_STEPS} steps")
 
 
 def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
@@ -134,7 +189,8 @@ def scripted_scoop(params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
     The spade enters the deposit through its open side with the blade nearly flat on the ground
     (handle 12 degrees up), slides under the pile to 8 cm from the back wall, lifts 0.3 m while
     tilting the tip up 10 degrees (sand rests against the back rim), carries the blade over the goal
-    box, then raises the handle to 60 degrees so the sand slides off the open tip, and holds.
+    box, then raises the handle to 80 degrees (beyond the 68-degree friction angle of the sand on
+    the blade) so the sand slides off the open tip, and holds.
     Returns (T, 3) head positions and (T, 3, 3) rotations (world frame) at ``fps``.
     """
     sand = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
@@ -142,15 +198,15 @@ def scripted_scoop(params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
     yaw = float(params["sand_yaw"])
     heading = rotation_z(yaw) @ np.array([0.0, 1.0, 0.0])  # horizontal direction from tip to handle
     up = np.array([0.0, 0.0, 1.0])
-    blade_middle = tool_spec("spade").head_length / 2
+    blade_middle = SPADE_BLADE_LENGTH / 2
     deg = np.pi / 180
     keyframes = [  # time (s), head position (m), handle elevation (rad)
         (0.0, sand + 0.45 * heading + 0.008 * up, 12 * deg),
         (1.2, sand - 0.12 * heading + 0.008 * up, 12 * deg),
         (1.7, sand - 0.05 * heading + 0.30 * up, -10 * deg),
         (2.9, goal - blade_middle * heading + 0.30 * up, -10 * deg),
-        (3.5, goal - blade_middle * heading + 0.25 * up, 60 * deg),
-        (4.5, goal - blade_middle * heading + 0.25 * up, 60 * deg),
+        (3.5, goal - blade_middle * heading + 0.20 * up, 80 * deg),
+        (4.5, goal - blade_middle * heading + 0.20 * up, 80 * deg),
     ]
     key_times = np.array([k[0] for k in keyframes])
     key_heads = np.array([k[1] for k in keyframes])
@@ -167,9 +223,9 @@ class SpatialSpadeScene:
     """Batched 3D spade scene (see the module docstring).
 
     Args:
-        n_spheres: number of sand spheres, 30..100.
+        n_spheres: number of sand spheres, 1..MAX_SPHERES (400).
         substeps: physics sub-steps per control step (10 -> 240 Hz).
-        material: sphere constants (radius, friction, ...).
+        material: sphere constants (radius, friction, ...); default the original scene's sand.
         control_dt: duration of one ``step``, s.
     """
 
@@ -178,13 +234,13 @@ class SpatialSpadeScene:
 
     def __init__(
         self,
-        n_spheres: int = 50,
+        n_spheres: int = 200,
         substeps: int = 10,
-        material: GranularMaterial = GranularMaterial(),
+        material: GranularMaterial = AUTHORS_SAND,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
-        if not 30 <= int(n_spheres) <= 100:
-            raise ValueError(f"n_spheres must be in 30..100, got {n_spheres!r}")
+        if not 1 <= int(n_spheres) <= MAX_SPHERES:
+            raise ValueError(f"n_spheres must be in 1..{MAX_SPHERES}, got {n_spheres!r}")
         require_counts(substeps=substeps)
         require_positive(control_dt=control_dt)
         self.n_spheres = int(n_spheres)
@@ -241,7 +297,7 @@ class SpatialSpadeScene:
 
     # --------------------------------------------------------------------------------- lifecycle
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """B instances: walls at ``params``, each pile jittered by ``rng`` then settled; no spade yet."""
+        """B instances: walls at ``params``, the cached heap shifted by ``rng`` per instance; no spade yet."""
         batch_size = check_reset(self, params, batch_size)
         b = self.batch_size = batch_size
         self.sand_position = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
@@ -256,14 +312,10 @@ class SpatialSpadeScene:
             rotations=np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
             half_extents=np.concatenate([deposit_halves, goal_halves]),
         )
-        radius = self.material.radius
-        local = np.broadcast_to(pile_lattice(self.n_spheres, radius), (b, self.n_spheres, 3)).copy()
-        local[..., :2] += rng.uniform(-LATTICE_GAP / 2, LATTICE_GAP / 2, size=(b, self.n_spheres, 2))
+        heap = settled_heap(self.n_spheres, self.material, self.substeps)
+        shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
         self._world = ParticleWorld(self.material, self.walls, self.shapes)
-        self._world.reset(self.sand_position + local @ deposit_rotation.T)
-        settle_steps = max(1, int(round(SETTLE_TIME / self.control_dt)))
-        for _ in range(settle_steps):
-            self._world.advance(self.control_dt, self.substeps)
+        self._world.reset(self.sand_position + (heap + shift) @ deposit_rotation.T)
         #: Control steps since reset, and (B,) steps that ended with >= SUCCESS_SPHERES in the box.
         self.steps = 0
         self.successful_steps = np.zeros(b, dtype=int)
@@ -311,7 +363,10 @@ class SpatialSpadeScene:
         """(B, N) bool: sphere centres inside the goal box."""
         offset = self._require_reset().positions - self.goal_position
         half = GOAL_INNER / 2
-        return (np.abs(offset[..., 0]) < half) & (np.abs(offset[..., 1]) < half) & (offset[..., 2] < GOAL_WALL_HEIGHT)
+        return (
+            (np.abs(offset[..., 0]) < half) & (np.abs(offset[..., 1]) < half)
+            & (offset[..., 2] >= 0.0) & (offset[..., 2] <= GOAL_REGION_HEIGHT)
+        )
 
     def spheres_on_spade(self) -> np.ndarray:
         """(B, N) bool: sphere centres above the blade's carrying face, within its rim (tool frame)."""
@@ -319,11 +374,25 @@ class SpatialSpadeScene:
         if world.tool_position is None:
             return np.zeros((self.batch_size, self.n_spheres), dtype=bool)
         local = np.einsum("bnj,bja->bna", world.positions - world.tool_position[:, None], world.tool_rotation)
-        spec = tool_spec("spade")
         return (
             (local[..., 0] > 0.0) & (local[..., 0] < SPADE_RIM_HEIGHT + self.material.radius)
-            & (np.abs(local[..., 1]) < spec.head_width / 2) & (local[..., 2] > 0.0) & (local[..., 2] < spec.head_length)
+            & (np.abs(local[..., 1]) < SPADE_BLADE_WIDTH / 2) & (local[..., 2] > 0.0)
+            & (local[..., 2] < SPADE_BLADE_LENGTH)
         )
+
+    def static_penetration(self) -> np.ndarray:
+        """(B,) deepest penetration (m) of a sphere into the ground or a wall, 0 if none.
+
+        The solver keeps it at 0 (static surfaces win, module docstring); a diagnostic for tests
+        and benchmarks.
+        """
+        positions = self._require_reset().positions
+        walls = self.walls
+        local = np.einsum("bnkj,kja->bnka", positions[:, :, None] - walls.centers, walls.rotations)
+        outside = np.linalg.norm(np.maximum(np.abs(local) - walls.half_extents, 0.0), axis=-1)
+        radius = self.material.radius
+        deepest = np.maximum(radius - positions[..., 2], radius - outside.min(axis=-1))
+        return np.maximum(deepest.max(axis=1), 0.0)
 
     def goal_reward(self) -> np.ndarray:
         """(B,) number of spheres in the goal box."""

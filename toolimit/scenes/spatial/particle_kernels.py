@@ -1,0 +1,425 @@
+"""Compiled (numba) kernels of the particle solver of :mod:`toolimit.scenes.spatial.particles`.
+
+The scheme, the contact groups and their order are documented there; this module only holds the
+loops, written per sphere so that numba compiles them to plain machine code (one core, no
+temporaries). Every function works on one instance ``b`` of the batched arrays at a time, in the
+world frame, metres and seconds, except where a name says *local* (a box's or the tool's frame).
+
+Kernels are compiled on first use and cached on disk (``cache=True``), so only the first import on
+a machine pays the compile time.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+# Indices into the ``coefficients`` vector (see particles.GranularMaterial.coefficients).
+RADIUS, MU_SPHERE_S, MU_SPHERE_K, MU_TOOL_S, MU_TOOL_K = 0, 1, 2, 3, 4
+MU_GROUND_S, MU_GROUND_K, MU_WALL_S, MU_WALL_K, MASS_SCALING, RELAXATION = 5, 6, 7, 8, 9, 10
+SLEEP_SPEED, MAX_SPEED, PAIR_MARGIN, GRAVITY = 11, 12, 13, 14
+N_COEFFICIENTS = 15
+
+_jit = nb.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")
+#: Small helpers called per sphere and per shape are inlined by numba: a call that passes arrays
+#: costs reference counting, several times the work of the helper itself (3x the whole step).
+_inline = nb.njit(cache=True, nogil=True, fastmath=True, error_model="numpy", inline="always")
+
+
+@_inline
+def _friction(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k):  # type: ignore[no-untyped-def]
+    """Coulomb friction by position: minus the tangential part of the relative displacement r if it
+    is below mu_s depth (static), else the part mu_k depth of it (kinetic). Returns 3 floats."""
+    along = rx * nx + ry * ny + rz * nz
+    tx, ty, tz = rx - along * nx, ry - along * ny, rz - along * nz
+    slip = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if slip < mu_s * depth:
+        scale = 1.0
+    else:
+        scale = min(mu_k * depth / max(slip, 1e-15), 1.0)
+    return -tx * scale, -ty * scale, -tz * scale
+
+
+@_inline
+def _box_contact(s, e, half, radius, mu_s, mu_k, out):  # type: ignore[no-untyped-def]
+    """Contact of a sphere moving from ``s`` to ``e`` (3,) (box-local frame) with a box of half
+    extents ``half`` (3,). Writes the normal push (out[0:3]) and the friction correction
+    (out[3:6]) to add to ``e``; returns whether there is a contact.
+
+    Closest-point contact with the rounded box, or, if the segment s -> e crosses the box itself
+    (slab test), a push out through the face entered by (the axis where ``s`` is most outside;
+    the nearest face if ``s`` is inside), whatever the depth.
+    """
+    # Closest point of the box to the end point.
+    ox = e[0] - min(max(e[0], -half[0]), half[0])
+    oy = e[1] - min(max(e[1], -half[1]), half[1])
+    oz = e[2] - min(max(e[2], -half[2]), half[2])
+    distance = math.sqrt(ox * ox + oy * oy + oz * oz)
+    contact = distance < radius
+    depth = radius - distance
+    inv = 1.0 / max(distance, 1e-15)
+    nx, ny, nz = ox * inv, oy * inv, oz * inv
+    # Slab test of the segment against the box itself.
+    t_entry, t_exit = -1e300, 1e300
+    face, face_excess = 0, -1e300
+    for a in range(3):
+        m = e[a] - s[a]
+        if abs(m) < 1e-12:
+            m = 1e-12
+        t_low = (-half[a] - s[a]) / m
+        t_high = (half[a] - s[a]) / m
+        t_entry = max(t_entry, min(t_low, t_high))
+        t_exit = min(t_exit, max(t_low, t_high))
+        excess = abs(s[a]) - half[a]
+        if excess > face_excess:
+            face, face_excess = a, excess
+    if t_entry <= t_exit and t_exit >= 0.0 and t_entry <= 1.0:
+        sign = 1.0 if s[face] >= 0.0 else -1.0
+        nx, ny, nz = 0.0, 0.0, 0.0
+        if face == 0:
+            nx = sign
+        elif face == 1:
+            ny = sign
+        else:
+            nz = sign
+        depth = half[face] + radius - sign * e[face]
+        contact = True
+    if not contact:
+        return False
+    depth = max(depth, 0.0)
+    px, py, pz = nx * depth, ny * depth, nz * depth
+    fx, fy, fz = _friction(e[0] + px - s[0], e[1] + py - s[1], e[2] + pz - s[2], nx, ny, nz, depth, mu_s, mu_k)
+    out[0], out[1], out[2], out[3], out[4], out[5] = px, py, pz, fx, fy, fz
+    return True
+
+
+@_inline
+def _boxes_correction(start, end, centers, rotations, halves, bounds, radius, mu_s, mu_k, moved, scratch):  # type: ignore[no-untyped-def]
+    """Correction ``moved`` (3,) of a sphere (start, end (3,) in the boxes' common frame) against
+    oriented boxes (K, ...): pushes summed (faces meeting at an edge are orthogonal), friction
+    averaged over the touching boxes. ``bounds`` (K, 2, 3): each box's axis-aligned bounds in the
+    common frame grown by the radius (broad phase); ``scratch``: (18,) work space. Returns the
+    number of touching boxes."""
+    s, e, out, push, friction = scratch[0:3], scratch[3:6], scratch[6:12], scratch[12:15], scratch[15:18]
+    push[:] = 0.0
+    friction[:] = 0.0
+    touching = 0
+    for k in range(centers.shape[0]):
+        near = True
+        for a in range(3):
+            if min(start[a], end[a]) >= bounds[k, 1, a] or max(start[a], end[a]) <= bounds[k, 0, a]:
+                near = False
+                break
+        if not near:
+            continue
+        for a in range(3):
+            sa = 0.0
+            ea = 0.0
+            for c in range(3):
+                sa += (start[c] - centers[k, c]) * rotations[k, c, a]
+                ea += (end[c] - centers[k, c]) * rotations[k, c, a]
+            s[a], e[a] = sa, ea
+            reach = halves[k, a] + radius
+            if min(sa, ea) >= reach or max(sa, ea) <= -reach:
+                near = False
+                break
+        if not near or not _box_contact(s, e, halves[k], radius, mu_s, mu_k, out):
+            continue
+        touching += 1
+        for c in range(3):
+            for a in range(3):
+                push[c] += rotations[k, c, a] * out[a]
+                friction[c] += rotations[k, c, a] * out[3 + a]
+    for c in range(3):
+        moved[c] = push[c] + friction[c] / max(touching, 1)
+    return touching
+
+
+@_jit
+def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+    """One averaged Jacobi pass over instance b's candidate sphere pairs, with mass scaling and
+    friction; updates ``predicted[b]`` in place."""
+    now, before, listed = predicted[b], previous[b], pairs[b]
+    n = now.shape[0]
+    r2 = 2.0 * coefficients[RADIUS]
+    mu_s, mu_k, k_mass = coefficients[MU_SPHERE_S], coefficients[MU_SPHERE_K], coefficients[MASS_SCALING]
+    total = np.zeros((n, 4))  # summed corrections (x, y, z) and number of contacts
+    inv_mass = np.empty(n)
+    for i in range(n):
+        inv_mass[i] = math.exp(k_mass * now[i, 2])
+    for p in range(n_pairs[b]):
+        i, j = listed[p, 0], listed[p, 1]
+        ox = now[i, 0] - now[j, 0]
+        oy = now[i, 1] - now[j, 1]
+        oz = now[i, 2] - now[j, 2]
+        d2 = ox * ox + oy * oy + oz * oz
+        if d2 >= r2 * r2:
+            continue
+        distance = math.sqrt(d2)
+        depth = r2 - distance
+        inv = 1.0 / max(distance, 1e-15)
+        nx, ny, nz = ox * inv, oy * inv, oz * inv
+        rx = now[i, 0] - before[i, 0] - now[j, 0] + before[j, 0] + nx * depth
+        ry = now[i, 1] - before[i, 1] - now[j, 1] + before[j, 1] + ny * depth
+        rz = now[i, 2] - before[i, 2] - now[j, 2] + before[j, 2] + nz * depth
+        fx, fy, fz = _friction(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k)
+        cx, cy, cz = nx * depth + fx, ny * depth + fy, nz * depth + fz
+        share = inv_mass[i] / (inv_mass[i] + inv_mass[j])
+        rest = share - 1.0
+        total[i, 0] += share * cx
+        total[i, 1] += share * cy
+        total[i, 2] += share * cz
+        total[i, 3] += 1.0
+        total[j, 0] += rest * cx
+        total[j, 1] += rest * cy
+        total[j, 2] += rest * cz
+        total[j, 3] += 1.0
+    relaxation = coefficients[RELAXATION]
+    for i in range(n):
+        if total[i, 3] > 0.0:
+            scale = relaxation / total[i, 3]
+            now[i, 0] += total[i, 0] * scale
+            now[i, 1] += total[i, 1] * scale
+            now[i, 2] += total[i, 2] * scale
+
+
+@_jit
+def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, box_centers, box_rotations,
+             box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
+             wall_rotations, wall_halves, wall_bounds, coefficients):  # type: ignore[no-untyped-def]
+    """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
+    ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
+    at its end), then the walls and the ground again without friction, so that static surfaces
+    win. Updates ``predicted[b]`` in place."""
+    n = predicted.shape[1]
+    radius = coefficients[RADIUS]
+    if n_pairs[b]:
+        _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients)
+    start, end, moved, scratch = np.empty(3), np.empty(3), np.empty(3), np.empty(18)
+    # Static surfaces with friction before the tool (so friction never drags a sphere into it) ...
+    mu_s, mu_k = coefficients[MU_GROUND_S], coefficients[MU_GROUND_K]
+    for i in range(n):
+        depth = radius - predicted[b, i, 2]
+        if depth > 0.0:
+            predicted[b, i, 2] = radius
+            fx, fy, fz = _friction(predicted[b, i, 0] - previous[b, i, 0], predicted[b, i, 1] - previous[b, i, 1],
+                                   predicted[b, i, 2] - previous[b, i, 2], 0.0, 0.0, 1.0, depth, mu_s, mu_k)
+            predicted[b, i, 0] += fx
+            predicted[b, i, 1] += fy
+    _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius,
+                coefficients[MU_WALL_S], coefficients[MU_WALL_K], start, end, moved, scratch)
+    if has_tool:
+        mu_s, mu_k = coefficients[MU_TOOL_S], coefficients[MU_TOOL_K]
+        for i in range(n):
+            outside = False
+            for a in range(3):
+                sa = 0.0
+                ea = 0.0
+                for c in range(3):
+                    sa += (previous[b, i, c] - p0[b, c]) * r0[b, c, a]
+                    ea += (predicted[b, i, c] - p1[b, c]) * r1[b, c, a]
+                start[a], end[a] = sa, ea
+                if min(sa, ea) >= tool_high[a] or max(sa, ea) <= tool_low[a]:
+                    outside = True
+            if outside:
+                continue
+            _boxes_correction(start, end, box_centers, box_rotations, box_halves, box_bounds, radius, mu_s, mu_k, moved,
+                              scratch)
+            for a in range(3):
+                end[a] += moved[a]
+            # Capsules (handles): closest-point contact, pushes summed, friction averaged.
+            touching = 0
+            ex, ey, ez, gx, gy, gz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            for k in range(capsule_radii.shape[0]):
+                ax = capsule_ends[k, 0] - capsule_starts[k, 0]
+                ay = capsule_ends[k, 1] - capsule_starts[k, 1]
+                az = capsule_ends[k, 2] - capsule_starts[k, 2]
+                length2 = max(ax * ax + ay * ay + az * az, 1e-18)
+                t = ((end[0] - capsule_starts[k, 0]) * ax + (end[1] - capsule_starts[k, 1]) * ay
+                     + (end[2] - capsule_starts[k, 2]) * az) / length2
+                t = min(max(t, 0.0), 1.0)
+                ox = end[0] - capsule_starts[k, 0] - t * ax
+                oy = end[1] - capsule_starts[k, 1] - t * ay
+                oz = end[2] - capsule_starts[k, 2] - t * az
+                distance = math.sqrt(ox * ox + oy * oy + oz * oz)
+                depth = capsule_radii[k] + radius - distance
+                if depth <= 0.0:
+                    continue
+                touching += 1
+                inv = 1.0 / max(distance, 1e-15)
+                nx, ny, nz = ox * inv, oy * inv, oz * inv
+                fx, fy, fz = _friction(end[0] + nx * depth - start[0], end[1] + ny * depth - start[1],
+                                       end[2] + nz * depth - start[2], nx, ny, nz, depth, mu_s, mu_k)
+                ex, ey, ez = ex + nx * depth, ey + ny * depth, ez + nz * depth
+                gx, gy, gz = gx + fx, gy + fy, gz + fz
+            share = 1.0 / max(touching, 1)
+            moved[0] += ex + gx * share
+            moved[1] += ey + gy * share
+            moved[2] += ez + gz * share
+            for c in range(3):
+                predicted[b, i, c] += r1[b, c, 0] * moved[0] + r1[b, c, 1] * moved[1] + r1[b, c, 2] * moved[2]
+
+
+    # ... and their normal constraints after it: the walls, then the ground's hard limit, win.
+    _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, 0.0, 0.0,
+                start, end, moved, scratch)
+    for i in range(n):
+        predicted[b, i, 2] = max(predicted[b, i, 2], radius)
+
+
+@_inline
+def _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k,
+                start, end, moved, scratch):  # type: ignore[no-untyped-def]
+    """Contacts of instance b's spheres with the walls (friction mu_s, mu_k), in place."""
+    if wall_centers.shape[0] == 0:
+        return
+    for i in range(predicted.shape[1]):
+        for a in range(3):
+            start[a], end[a] = previous[b, i, a], predicted[b, i, a]
+        if _boxes_correction(start, end, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k,
+                             moved, scratch):
+            for a in range(3):
+                predicted[b, i, a] += moved[a]
+
+
+@_jit
+def _rebuild_pairs(b, positions, built_at, pairs, n_pairs, reach):  # type: ignore[no-untyped-def]
+    """Verlet list of instance b: every pair closer than ``reach``, by sort and sweep along x.
+    Returns False (list left incomplete) if ``pairs`` is too small."""
+    n = positions.shape[1]
+    order = np.argsort(positions[b, :, 0])
+    count = 0
+    capacity = pairs.shape[1]
+    reach2 = reach * reach
+    for u in range(n):
+        i = order[u]
+        for w in range(u + 1, n):
+            j = order[w]
+            dx = positions[b, j, 0] - positions[b, i, 0]
+            if dx >= reach:
+                break
+            dy = positions[b, j, 1] - positions[b, i, 1]
+            dz = positions[b, j, 2] - positions[b, i, 2]
+            if dx * dx + dy * dy + dz * dz < reach2:
+                if count >= capacity:
+                    return False
+                pairs[b, count, 0] = min(i, j)
+                pairs[b, count, 1] = max(i, j)
+                count += 1
+    n_pairs[b] = count
+    for i in range(n):
+        for a in range(3):
+            built_at[b, i, a] = positions[b, i, a]
+    return True
+
+
+@_jit
+def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+    """Rebuild the Verlet list of every instance one of whose spheres moved half the margin since
+    its last build (so no unlisted pair can touch). Returns False if ``pairs`` is too small."""
+    margin = coefficients[PAIR_MARGIN]
+    reach = 2.0 * coefficients[RADIUS] + margin
+    limit = (0.5 * margin) ** 2
+    for b in range(positions.shape[0]):
+        stale = n_pairs[b] < 0
+        for i in range(positions.shape[1]):
+            if stale:
+                break
+            dx = positions[b, i, 0] - built_at[b, i, 0]
+            dy = positions[b, i, 1] - built_at[b, i, 1]
+            dz = positions[b, i, 2] - built_at[b, i, 2]
+            stale = dx * dx + dy * dy + dz * dz >= limit
+        if stale and not _rebuild_pairs(b, positions, built_at, pairs, n_pairs, reach):
+            n_pairs[b] = -1
+            return False
+    return True
+
+
+@_jit
+def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
+    """Whether a sphere of instance b meets the tool's grown bounds during the sub-step."""
+    for i in range(positions.shape[1]):
+        inside = True
+        for a in range(3):
+            sa = 0.0
+            ea = 0.0
+            for c in range(3):
+                sa += (positions[b, i, c] - p0[b, c]) * r0[b, c, a]
+                ea += (positions[b, i, c] - p1[b, c]) * r1[b, c, a]
+            if min(sa, ea) >= tool_high[a] or max(sa, ea) <= tool_low[a]:
+                inside = False
+                break
+        if inside:
+            return True
+    return False
+
+
+@_jit
+def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, first_substep, h, has_tool,
+            path_positions, path_rotations, box_centers, box_rotations, box_halves, box_bounds, capsule_starts, capsule_ends,
+            capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, wall_bounds, coefficients,
+            freeze_after):  # type: ignore[no-untyped-def]
+    """Sub-steps ``first_substep`` .. S-1 of length h (s) for all instances, the tool moving along
+    ``path_positions`` (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3). Updates the state arrays in
+    place. Returns -1 when done, or the sub-step at which ``pairs`` proved too small (nothing of
+    that sub-step was simulated yet: grow ``pairs`` and call again from there)."""
+    n_batch, n = positions.shape[0], positions.shape[1]
+    sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2
+    max_speed, gravity = coefficients[MAX_SPEED], coefficients[GRAVITY]
+    predicted = np.empty_like(positions)
+    for s in range(first_substep, path_positions.shape[0] - 1):
+        if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
+            return s
+        p0, r0, p1, r1 = path_positions[s], path_rotations[s], path_positions[s + 1], path_rotations[s + 1]
+        for b in range(n_batch):
+            if freeze_after > 0 and resting[b] >= freeze_after and (
+                    not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high)):
+                continue  # island sleeping: this instance is at rest and untouched
+            for i in range(n):
+                carried[b, i, 2] -= gravity * h
+                for a in range(3):
+                    predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
+            _project(b, positions, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, box_centers, box_rotations,
+                     box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
+                     wall_rotations, wall_halves, wall_bounds, coefficients)
+            awake_any = False
+            for i in range(n):
+                dx = predicted[b, i, 0] - positions[b, i, 0]
+                dy = predicted[b, i, 1] - positions[b, i, 1]
+                dz = predicted[b, i, 2] - positions[b, i, 2]
+                speed2 = dx * dx + dy * dy + dz * dz
+                awake = speed2 >= sleep2
+                scale = 1.0 / h
+                if max_speed > 0.0 and speed2 > (max_speed * h) ** 2:
+                    scale = max_speed / math.sqrt(speed2)
+                carried[b, i, 0], carried[b, i, 1], carried[b, i, 2] = dx * scale, dy * scale, dz * scale
+                if awake:
+                    awake_any = True
+                    for a in range(3):
+                        positions[b, i, a] = predicted[b, i, a]
+                        velocities[b, i, a] = carried[b, i, a]
+                else:
+                    for a in range(3):
+                        velocities[b, i, a] = 0.0
+            resting[b] = 0 if awake_any else resting[b] + 1
+    return -1
+
+
+@_jit
+def place(positions, built_at, pairs, n_pairs, iterations, tool_position, tool_rotation, box_centers, box_rotations,
+          box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers, wall_rotations,
+          wall_halves, wall_bounds, coefficients):  # type: ignore[no-untyped-def]
+    """``iterations`` position-only passes over all contacts with the tool still at its pose
+    (B, 3), (B, 3, 3). Returns False if ``pairs`` proved too small (grow it and call again)."""
+    predicted = positions.copy()
+    for _ in range(iterations):
+        if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
+            return False
+        for b in range(positions.shape[0]):
+            _project(b, positions, predicted, pairs, n_pairs, True, tool_position, tool_rotation, tool_position,
+                     tool_rotation, box_centers, box_rotations, box_halves, box_bounds, capsule_starts, capsule_ends,
+                     capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, wall_bounds, coefficients)
+        positions[...] = predicted
+    return True
