@@ -25,7 +25,7 @@ RECIPES: dict[tuple[str, str, str], tuple[str, list[str], list[str]]] = {
     ("spade", "planar", "planar3"): ("spade_03", ["--candidates", "10"], ["--velocity-weight", "1e-4"]),
     ("hammer", "planar", "planar3"): ("hammer_00", ["--candidates", "10"], ["--velocity-weight", "1e-4"]),
     ("scythe", "planar", "panda"): ("scythe_00", ["--candidates", "10"], ["--velocity-weight", "1e-4"]),
-    ("spade", "3d", "panda"): ("spade_00", ["--candidates", "5"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
+    ("spade", "3d", "panda"): ("spade_01", ["--candidates", "10"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
     ("hammer", "3d", "panda"): ("hammer_00", ["--candidates", "5"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
     ("scythe", "3d", "panda"): ("scythe_00", ["--candidates", "5"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
 }
