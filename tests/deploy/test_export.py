@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 from conftest import PANDA_JOINTS, PANDA_MIDDLE, bump, slow_smooth
 
-from toolimit.deploy import PathOutsideLimits, export_trajectory, load_trajectory, published_limits, retime
+from toolimit.deploy import (
+    PathOutsideLimits,
+    export_trajectory,
+    load_trajectory,
+    published_limits,
+    retime,
+)
 from toolimit.deploy.export import SUMMARY_JSON, TRAJECTORY_CSV
 
 DT = 1.0 / 24.0
@@ -51,7 +57,7 @@ def _export(write_trajectory, tmp_path, q, dt=DT, **kwargs):
 
 def test_a_slow_smooth_trajectory_keeps_its_timing(write_trajectory, tmp_path):
     q = slow_smooth()
-    plan, times, positions, summary = _export(write_trajectory, tmp_path, q)
+    _, times, positions, summary = _export(write_trajectory, tmp_path, q)
     peaks = _assert_within_limits_by_finite_differences(times, positions)
     assert peaks["velocity"] < 0.5
     # nothing to slow down: the duration is the optimised 4 s plus the two end spans (2 dt / 4)
@@ -84,7 +90,7 @@ def _bang_bang_into_the_limit(dt: float = DT) -> np.ndarray:
 def test_a_trajectory_at_the_velocity_limits_touching_a_position_limit_is_retimed(write_trajectory, tmp_path):
     q = _bang_bang_into_the_limit()
     assert q[:, 2].max() == PANDA.position_upper[2]
-    plan, times, positions, summary = _export(write_trajectory, tmp_path, q)
+    _, times, positions, summary = _export(write_trajectory, tmp_path, q)
     peaks = _assert_within_limits_by_finite_differences(times, positions)
     assert positions[:, 2].max() <= PANDA.position_upper[2]  # no overshoot past the limit
     assert peaks["acceleration"] > 0.95  # slowed down just enough: the binding limit is reached
@@ -123,7 +129,7 @@ def test_only_the_fast_part_is_slowed_down():
 
 def test_too_fast_everywhere_is_retimed_and_respects_every_limit(write_trajectory, tmp_path):
     fast = slow_smooth(duration=0.5)  # the 4 s path in 0.5 s
-    plan, times, positions, summary = _export(write_trajectory, tmp_path, fast)
+    _, times, positions, summary = _export(write_trajectory, tmp_path, fast)
     _assert_within_limits_by_finite_differences(times, positions)
     assert summary["duration_s"] > 1.5 * summary["optimised_duration_s"]
 

@@ -4,9 +4,20 @@
 policy's rollout): it returns a :class:`RetimedPath` whose ``sample(rate)`` gives the commands.
 """
 
-from toolimit.deploy.export import ExportPlan, JointTrajectory, export_trajectory, load_trajectory, plan_export
+from toolimit.deploy.export import (
+    ExportPlan,
+    JointTrajectory,
+    export_trajectory,
+    load_trajectory,
+    plan_export,
+)
 from toolimit.deploy.limits import SUPPORTED_ROBOTS, JointLimits, published_limits
-from toolimit.deploy.retime import PathOutsideLimits, RetimedPath, SampledTrajectory, retime
+from toolimit.deploy.retime import (
+    PathOutsideLimits,
+    RetimedPath,
+    SampledTrajectory,
+    retime,
+)
 
 __all__ = [
     "SUPPORTED_ROBOTS",

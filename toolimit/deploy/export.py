@@ -29,7 +29,13 @@ from pathlib import Path
 import numpy as np
 
 from toolimit.artifacts import atomic_path
-from toolimit.deploy.limits import UNITS, JointLimits, QuantityCheck, check_samples, published_limits
+from toolimit.deploy.limits import (
+    UNITS,
+    JointLimits,
+    QuantityCheck,
+    check_samples,
+    published_limits,
+)
 from toolimit.deploy.retime import (
     DEFAULT_SUBDIVISIONS,
     METHOD,
