@@ -57,7 +57,7 @@ def _export(write_trajectory, tmp_path, q, dt=DT, **kwargs):
 
 def test_a_slow_smooth_trajectory_keeps_its_timing(write_trajectory, tmp_path):
     q = slow_smooth()
-    _, times, positions, summary = _export(write_trajectory, tmp_path, q)
+    plan, times, positions, summary = _export(write_trajectory, tmp_path, q)
     peaks = _assert_within_limits_by_finite_differences(times, positions)
     assert peaks["velocity"] < 0.5
     # nothing to slow down: the duration is the optimised 4 s plus the two end spans (2 dt / 4)
