@@ -12,6 +12,7 @@ import contextlib
 import functools
 import multiprocessing
 import re
+import signal
 import time
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -31,6 +32,7 @@ from toolimit.align.sampler import (
     minimum_element_distance,
 )
 from toolimit.demos.tool_demo import ToolDemo
+from toolimit.interrupts import Interrupted, interruptible, starting_processes
 from toolimit.scenes.base import InvalidSceneParameters, ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
@@ -212,6 +214,8 @@ _WORKER_EVALUATOR: SampleEvaluator | None = None
 
 def _init_worker(scene_factory: SceneFactory, *evaluator_args: object) -> None:
     global _WORKER_EVALUATOR
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the process group is the parent's to handle
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # ignored now: no need to keep it blocked
     _WORKER_EVALUATOR = SampleEvaluator(scene_factory(), *evaluator_args)  # type: ignore[arg-type]
 
 
@@ -248,13 +252,30 @@ def _outcomes_in_order(
     pending: list[Future[list[SampleOutcome]]] = []
     try:
         for start, stop in chunks:
-            pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
+            if len(pending) < workers:  # the submits that start the worker processes
+                with starting_processes():
+                    pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
+            else:
+                pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
             if len(pending) >= 2 * workers:
                 yield pending.pop(0).result()
         while pending:
             yield pending.pop(0).result()
     finally:
-        executor.shutdown(wait=True, cancel_futures=True)
+        _stop_workers(executor)
+
+
+def _stop_workers(executor: ProcessPoolExecutor) -> None:
+    """Cancel the queued chunks and end the worker processes now, without waiting for running chunks
+    (their results are not needed: the search has enough, or was interrupted). Python 3.14 has
+    ``executor.terminate_workers()``; before it, the processes are only reachable as ``_processes``."""
+    processes = list((getattr(executor, "_processes", None) or {}).values())
+    executor.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=1.0)
 
 
 def align(
@@ -279,9 +300,13 @@ def align(
         progress: show a tqdm bar.
         scene_factory: a picklable callable making the scene instead of the registry (tests,
             researchers' own scenes); every worker calls it once.
-        checkpoint: a JSON file where the search saves its progress (every few seconds) and from
-            which it resumes when the file was made with the same demo, scene, seed and settings;
-            it is removed when the search ends.
+        checkpoint: a JSON file where the search saves its progress (every few seconds, and when
+            interrupted) and from which it resumes when the file was made with the same demo,
+            scene, seed and settings; it is removed when the search ends.
+
+    Raises :class:`SearchInterrupted` (a KeyboardInterrupt) on SIGINT or SIGTERM, after saving the
+    checkpoint (if any sample finished) and ending the worker processes; a second signal during
+    that cleanup is ignored.
 
     The demo is resampled to the scene's control rate and projected onto the world's plane
     (:data:`~toolimit.align.config.DEMO_PLANES`); keypoints and the minimum element distance d_th
@@ -307,21 +332,46 @@ def align(
                disable=not progress)
     last_save = time.perf_counter()
     chunks = _outcomes_in_order(evaluator, scene_factory, config, workers, first=result.samples_tried)
-    with bar, contextlib.closing(chunks):
-        for outcomes in chunks:
-            enough = _merge(result, outcomes)
-            bar.set_postfix(candidates=len(result.candidates), rejected=result.samples_rejected, refresh=False)
-            bar.update(result.samples_tried - bar.n)
-            if enough:
-                break
-            if checkpoint is not None and time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+    with interruptible():
+        try:
+            with bar, contextlib.closing(chunks):  # closing the generator ends the worker processes
+                for outcomes in chunks:
+                    enough = _merge(result, outcomes)
+                    bar.set_postfix(candidates=len(result.candidates), rejected=result.samples_rejected,
+                                    refresh=False)
+                    bar.update(result.samples_tried - bar.n)
+                    if enough:
+                        break
+                    if checkpoint is not None and time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+                        result.wall_time_s = previous_time + time.perf_counter() - started
+                        save_checkpoint(checkpoint, key, _state(result))
+                        last_save = time.perf_counter()
+        except Interrupted as stop:
+            saved = None
+            if checkpoint is not None and result.samples_tried > 0:
                 result.wall_time_s = previous_time + time.perf_counter() - started
                 save_checkpoint(checkpoint, key, _state(result))
-                last_save = time.perf_counter()
+                saved = Path(checkpoint)
+            raise SearchInterrupted(stop.signum, result.samples_tried, len(result.candidates), saved) from None
     result.wall_time_s = previous_time + time.perf_counter() - started
     if checkpoint is not None:
         Path(checkpoint).unlink(missing_ok=True)
     return result
+
+
+class SearchInterrupted(Interrupted):
+    """The search stopped on SIGINT or SIGTERM, its worker processes ended.
+
+    Attributes: ``samples_tried`` (the index-ordered prefix examined), ``candidates`` (found in it),
+    ``checkpoint`` (the file holding that progress, None when nothing was saved: no checkpoint
+    asked for, or no sample finished).
+    """
+
+    def __init__(self, signum: int, samples_tried: int, candidates: int, checkpoint: Path | None) -> None:
+        super().__init__(signum)
+        self.samples_tried = samples_tried
+        self.candidates = candidates
+        self.checkpoint = checkpoint
 
 
 def _state(result: AlignmentResult) -> dict[str, Any]:

@@ -2,8 +2,9 @@
 
 Writes ``DIR/alignment.json`` (the search's record) and ``DIR/aligned_demo.npz`` (the best
 candidate's aligned motion); optionally a rerun recording (``--rerun``) and, in the 3d world, the
-best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (Ctrl-C: exit code 130) leaves ``DIR/alignment_checkpoint.json``; the
-same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
+best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (SIGINT,
+e.g. Ctrl-C: exit code 130; SIGTERM: 143) saves ``DIR/alignment_checkpoint.json`` if any sample
+finished; the same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
 is still written, with an empty candidate list, and no aligned demo), 2 bad input.
 """
 
@@ -94,7 +95,7 @@ def _check_arguments(args: argparse.Namespace) -> int:
 def run(args: argparse.Namespace) -> int:
     from toolimit.align.config import AlignmentConfig
     from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, write_alignment
-    from toolimit.align.search import align
+    from toolimit.align.search import SearchInterrupted, align
     from toolimit.demos import clean_demo, load_demo
 
     workers = _check_arguments(args)
@@ -112,9 +113,14 @@ def run(args: argparse.Namespace) -> int:
             demo, args.tool, args.world, config, seed=args.seed, workers=workers, progress=not args.quiet,
             checkpoint=checkpoint,
         )
-    except KeyboardInterrupt:
-        print(f"interrupted: run the same command again to resume from {checkpoint}", file=sys.stderr)
-        return 130
+    except SearchInterrupted as stop:
+        found = f"{stop.samples_tried} samples examined, {stop.candidates} candidate(s)"
+        if stop.checkpoint is not None:
+            print(f"interrupted ({stop.signal_name}) after {found}: progress saved to {stop.checkpoint}; "
+                  "run the same command again to resume", file=sys.stderr)
+        else:
+            print(f"interrupted ({stop.signal_name}) before any sample finished: nothing was saved", file=sys.stderr)
+        return stop.exit_code
     write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
     rejected = result.samples_rejected / max(result.samples_tried, 1)
     print(
