@@ -57,7 +57,7 @@ def test_an_interrupt_ends_every_process(repo_root, tmp_path, signum, to_group, 
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and process.poll() is None:  # workers started (and samples done)
-            done = re.findall(rb"\| *(\d+)/20000", bytes(stderr))
+            done = re.findall(rb"samples=(\d+)/20000", bytes(stderr))
             if len(_children(process.pid)) >= 2 and (not after_progress or (done and int(done[-1]) > 0)):
                 break
             time.sleep(0.02)

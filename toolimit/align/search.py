@@ -20,7 +20,6 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from toolimit.align.checkpoint import checkpoint_key, load_checkpoint, save_checkpoint
 from toolimit.align.config import DEMO_PLANES, AlignmentConfig
@@ -33,6 +32,7 @@ from toolimit.align.sampler import (
 )
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.interrupts import Interrupted, interruptible, starting_processes
+from toolimit.progress import tqdm
 from toolimit.scenes.base import InvalidSceneParameters, ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
@@ -297,7 +297,7 @@ def align(
         config: search settings (default :class:`AlignmentConfig`).
         seed: sample i uses ``np.random.default_rng([seed, i])``.
         workers: processes evaluating samples; the result does not depend on it.
-        progress: show a tqdm bar.
+        progress: show a tqdm bar of the candidates found against K, with the samples examined.
         scene_factory: a picklable callable making the scene instead of the registry (tests,
             researchers' own scenes); every worker calls it once.
         checkpoint: a JSON file where the search saves its progress (every few seconds, and when
@@ -328,8 +328,9 @@ def align(
     previous_time = 0.0
     if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:
         previous_time = _restore(result, state, evaluator)
-    bar = tqdm(total=config.samples, initial=result.samples_tried, desc=f"align {tool}/{world}", unit="sample",
-               disable=not progress)
+    # the search ends at the K-th candidate, usually long before the sample budget: count candidates
+    bar = tqdm(total=config.candidates, initial=len(result.candidates), desc=f"align {tool}/{world}",
+               unit="candidate", disable=not progress)
     last_save = time.perf_counter()
     chunks = _outcomes_in_order(evaluator, scene_factory, config, workers, first=result.samples_tried)
     with interruptible():
@@ -337,9 +338,9 @@ def align(
             with bar, contextlib.closing(chunks):  # closing the generator ends the worker processes
                 for outcomes in chunks:
                     enough = _merge(result, outcomes)
-                    bar.set_postfix(candidates=len(result.candidates), rejected=result.samples_rejected,
-                                    refresh=False)
-                    bar.update(result.samples_tried - bar.n)
+                    bar.set_postfix(samples=f"{result.samples_tried}/{config.samples}",
+                                    rejected=result.samples_rejected, refresh=False)
+                    bar.update(len(result.candidates) - bar.n)
                     if enough:
                         break
                     if checkpoint is not None and time.perf_counter() - last_save > CHECKPOINT_EVERY_S:

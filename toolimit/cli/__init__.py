@@ -12,6 +12,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import tempfile
+from pathlib import Path
+from typing import NoReturn
 
 from toolimit import interrupts
 
@@ -22,8 +25,31 @@ class CliError(Exception):
     """A user error: bad argument, missing or malformed file."""
 
 
+class _OneLineErrorParser(argparse.ArgumentParser):
+    """argparse, but a usage error (unknown choice, missing option) is one line, exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
+def check_writable_folder(folder: Path, option: str) -> None:
+    """Raise CliError unless files can be created in ``folder`` (created later if missing): checked
+    before any work, so that a long run never ends in an unwritable output."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise CliError(f"{option}: cannot write in {folder}: {existing} is a file, not a folder")
+    try:
+        with tempfile.NamedTemporaryFile(dir=existing, prefix=".toolimit-write-check."):
+            pass
+    except OSError as error:
+        raise CliError(f"{option}: cannot write in {folder}: creating a file in {existing} fails "
+                       f"({error.strerror})") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _OneLineErrorParser(
         prog="toolimit",
         description="A robot learns to use a tool from one video demonstration: "
         "demo (i) -> align (ii) -> trajopt (iii) -> export.",

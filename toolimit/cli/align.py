@@ -15,7 +15,7 @@ import os
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 DEFAULT_SAMPLES = 20_000
 #: The search's progress in the output folder while it runs (removed when it ends).
@@ -82,19 +82,23 @@ def _check_arguments(args: argparse.Namespace) -> int:
         raise CliError(f"--demo: no such file: {args.demo}")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
-    if args.rerun is not None and args.rerun.suffix != ".rrd":
-        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    check_writable_folder(args.out, "--out")
+    if args.rerun is not None:
+        if args.rerun.suffix != ".rrd":
+            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+        check_writable_folder(args.rerun.parent, "--rerun")
     if args.html is not None:
         if args.html.suffix != ".html":
             raise CliError(f"--html: expected a .html file name, got {args.html}")
         if args.world != "3d":
             raise CliError(f"--html: the meshcat replay draws the 3d worlds, not the {args.world} world")
+        check_writable_folder(args.html.parent, "--html")
     return workers
 
 
 def run(args: argparse.Namespace) -> int:
     from toolimit.align.config import AlignmentConfig
-    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, write_alignment
+    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, CANDIDATES_NPZ, write_alignment
     from toolimit.align.search import SearchInterrupted, align
     from toolimit.demos import clean_demo, load_demo
 
@@ -147,7 +151,11 @@ def run(args: argparse.Namespace) -> int:
         return 1
     print(
         f"best: sample {best.index}, mean goal reward {best.reward:.3f} "
-        f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m); "
-        f"wrote {args.out / ALIGNMENT_JSON} and {args.out / ALIGNED_DEMO_NPZ}"
+        f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m)"
+    )
+    robot = "panda" if args.world == "3d" else "planar3"
+    print(
+        f"wrote {args.out / ALIGNMENT_JSON}, {args.out / CANDIDATES_NPZ} and {args.out / ALIGNED_DEMO_NPZ}; next: "
+        f"toolimit trajopt --robot {robot} --tool {args.tool} --alignment {args.out} --out {args.out}_{robot}"
     )
     return 0

@@ -14,7 +14,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from toolimit.deploy import SUPPORTED_ROBOTS, export_trajectory, load_trajectory
+from toolimit.cli import check_writable_folder
+from toolimit.deploy import SUPPORTED_ROBOTS, export_trajectory, load_trajectory, published_limits
 from toolimit.deploy.export import DEFAULT_RATE_HZ, SUMMARY_JSON, TRAJECTORY_CSV
 from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
 
@@ -38,6 +39,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    published_limits(args.robot)  # an unsupported robot is refused before anything is read
+    check_writable_folder(args.out, "--out")
     trajectory = load_trajectory(args.trajectory)
     plan = export_trajectory(trajectory, args.robot, args.out, rate=args.rate, subdivisions=args.subdivisions,
                              source=str(args.trajectory / "trajectory.npz"))

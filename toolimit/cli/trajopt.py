@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
 
@@ -24,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "trajopt", help="optimise a robot trajectory tracking the aligned tool motion (stage iii)",
         description=__doc__.splitlines()[0],
     )
-    parser.add_argument("--robot", required=True, choices=ROBOTS, help="robot model")
+    parser.add_argument("--robot", required=True, help=f"robot model ({', '.join(ROBOTS)})")
     parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--alignment", type=Path, help="alignment output folder (reads aligned_demo.npz)")
@@ -74,11 +74,14 @@ def _time_scale(text: str) -> float | None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from toolimit.robots import make_robot
+    from toolimit.deploy import SUPPORTED_ROBOTS
+    from toolimit.robots import ROBOTS, make_robot
     from toolimit.tools import TOOLS
     from toolimit.trajopt import (TrackingWeights, TrackOptions, choose_time_scale, from_original_spade_tip,
                                   load_pose_targets, track)
 
+    if args.robot not in ROBOTS:
+        raise CliError(f"--robot: unknown robot {args.robot!r}; choose one of {', '.join(ROBOTS)}")
     if args.tool not in TOOLS:
         raise CliError(f"--tool: unknown tool {args.tool!r}; choose one of {', '.join(sorted(TOOLS))}")
     if args.starts <= 0:
@@ -91,8 +94,11 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
-    if args.rerun is not None and args.rerun.suffix != ".rrd":
-        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    check_writable_folder(args.out, "--out")
+    if args.rerun is not None:
+        if args.rerun.suffix != ".rrd":
+            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+        check_writable_folder(args.rerun.parent, "--rerun")
     if args.select_by_robot and args.alignment is None:
         raise CliError("--select-by-robot: needs --alignment DIR (the candidates of an alignment)")
     if args.alignment is not None:
@@ -132,9 +138,13 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"{args.robot}: time scale {result.time_scale:g}, J = {result.statistics['cost']:.4f}, "
         f"position error median {summary['position_error_m']['median'] * 100:.1f} cm, "
-        f"limit violations {result.limit_violations}, velocity violations {result.velocity_violations}; "
-        f"wrote {args.out}"
+        f"limit violations {result.limit_violations}, velocity violations {result.velocity_violations}"
     )
+    written = f"wrote {args.out / 'trajectory.npz'} and {args.out / 'trajectory.json'}"
+    if args.robot in SUPPORTED_ROBOTS:
+        print(f"{written}; next: toolimit export --trajectory {args.out} --robot {args.robot} --out {args.out}_export")
+    else:
+        print(f"{written} (export to a real robot needs published limits: {', '.join(SUPPORTED_ROBOTS)})")
     return 0
 
 

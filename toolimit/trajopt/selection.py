@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
-from tqdm.auto import tqdm
 
+from toolimit.progress import tqdm
 from toolimit.robots.model import RobotModel
 from toolimit.scenes.base import SceneParams
 from toolimit.scenes.registry import make_scene
