@@ -11,7 +11,7 @@ from toolimit.align import AlignmentConfig
 from toolimit.align.outputs import CANDIDATES_NPZ, write_alignment
 from toolimit.align.search import align
 from toolimit.cli import main
-from toolimit.demos import clean_demo, load_demo
+from toolimit.demos import load_demo
 from toolimit.trajopt.selection import load_candidates
 
 
@@ -19,8 +19,7 @@ from toolimit.trajopt.selection import load_candidates
 def spade_alignment(tmp_path_factory, repo_root):
     """A planar alignment of a shipped spade demo (5 candidates, seed 0)."""
     demo_path = repo_root / "data" / "demos" / "spade_04.npz"
-    demo, _ = clean_demo(load_demo(demo_path))
-    result = align(demo, "spade", "planar", AlignmentConfig(candidates=5), seed=0, progress=False)
+    result = align(load_demo(demo_path), "spade", "planar", AlignmentConfig(candidates=5), seed=0, progress=False)
     out = tmp_path_factory.mktemp("align")
     write_alignment(result, out, str(demo_path))
     return result, out

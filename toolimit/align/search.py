@@ -30,6 +30,7 @@ from toolimit.align.sampler import (
     draw_alignment_sample,
     minimum_element_distance,
 )
+from toolimit.demos.cleaning import CleaningReport, clean_demo
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.interrupts import Interrupted, interruptible, starting_processes
 from toolimit.progress import tqdm
@@ -90,6 +91,8 @@ class AlignmentResult:
         samples_to_first_candidate: index of the first candidate + 1, None if none.
         rejection_reasons: rejected samples per reason (its message with numbers replaced by '#').
         wall_time_s: seconds the search took, worker start-up included (summed over resumed runs).
+        cleaning: what :func:`~toolimit.demos.clean_demo` changed in the demo before the search,
+            None when the demo was aligned as given (``clean=False``).
     """
 
     tool: str
@@ -106,6 +109,7 @@ class AlignmentResult:
     samples_to_first_candidate: int | None = None
     rejection_reasons: dict[str, int] = field(default_factory=dict)
     wall_time_s: float = 0.0
+    cleaning: CleaningReport | None = None
 
     @property
     def best(self) -> Candidate | None:
@@ -288,11 +292,14 @@ def align(
     progress: bool = True,
     scene_factory: SceneFactory | None = None,
     checkpoint: str | Path | None = None,
+    clean: bool = True,
 ) -> AlignmentResult:
     """Search scene parameters, scale, z offset and rolls under which ``demo`` reaches the goal.
 
     Args:
-        demo: the demonstration (world frame, metres), any frame rate.
+        demo: the demonstration (world frame, metres), any frame rate. It is cleaned first
+            (:func:`~toolimit.demos.clean_demo`: reconstruction outliers replaced, jitter smoothed)
+            unless ``clean=False``, as ``toolimit align`` does unless ``--no-clean``.
         tool, world: the scene, built with :func:`toolimit.scenes.registry.make_scene`.
         config: search settings (default :class:`AlignmentConfig`).
         seed: sample i uses ``np.random.default_rng([seed, i])``.
@@ -300,6 +307,7 @@ def align(
         progress: show a tqdm bar of the candidates found against K, with the samples examined.
         scene_factory: a picklable callable making the scene instead of the registry (tests,
             researchers' own scenes); every worker calls it once.
+        clean: clean the demo before the search (default True; the report is ``result.cleaning``).
         checkpoint: a JSON file where the search saves its progress (every few seconds, and when
             interrupted) and from which it resumes when the file was made with the same demo,
             scene, seed and settings; it is removed when the search ends.
@@ -317,13 +325,16 @@ def align(
     if not (isinstance(workers, int) and workers >= 1):
         raise ValueError(f"workers: expected a positive integer, got {workers!r}")
     started = time.perf_counter()
+    cleaning = None
+    if clean:
+        demo, cleaning = clean_demo(demo)
     scene_factory = scene_factory or functools.partial(make_scene, tool, world)
     scene = scene_factory()
     prepared, plane = prepare_demo(demo, tool, world, scene.control_dt)
     keypoints = velocity_keypoints(prepared, config.keypoint_fraction)
     min_distance = minimum_element_distance(prepared.head)
     evaluator = SampleEvaluator(scene, prepared, keypoints, config, plane, min_distance, seed)
-    result = AlignmentResult(tool, world, plane, seed, config, prepared, keypoints, min_distance)
+    result = AlignmentResult(tool, world, plane, seed, config, prepared, keypoints, min_distance, cleaning=cleaning)
     key = checkpoint_key(tool, world, seed, config, prepared)
     previous_time = 0.0
     if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:

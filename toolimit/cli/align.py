@@ -100,13 +100,10 @@ def run(args: argparse.Namespace) -> int:
     from toolimit.align.config import AlignmentConfig
     from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, CANDIDATES_NPZ, write_alignment
     from toolimit.align.search import SearchInterrupted, align
-    from toolimit.demos import clean_demo, load_demo
+    from toolimit.demos import load_demo
 
     workers = _check_arguments(args)
     demo = load_demo(args.demo, tool=args.tool)  # also names the tool of files that do not store it
-    if not args.no_clean:
-        demo, report = clean_demo(demo)
-        print(f"cleaned demo: {len(report.replaced_frames)} of {demo.n_frames} frames replaced")
     settings = {} if args.z_offset_std is None else {"z_offset_std": args.z_offset_std}
     config = AlignmentConfig(samples=args.samples, candidates=args.candidates, **settings)
     checkpoint = args.out / CHECKPOINT_JSON
@@ -115,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = align(
             demo, args.tool, args.world, config, seed=args.seed, workers=workers, progress=not args.quiet,
-            checkpoint=checkpoint,
+            checkpoint=checkpoint, clean=not args.no_clean,
         )
     except SearchInterrupted as stop:
         found = f"{stop.samples_tried} samples examined, {stop.candidates} candidate(s)"
@@ -126,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"interrupted ({stop.signal_name}) before any sample finished: nothing was saved", file=sys.stderr)
         return stop.exit_code
     write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
+    if result.cleaning is not None:
+        print(f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced")
     rejected = result.samples_rejected / max(result.samples_tried, 1)
     print(
         f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples "

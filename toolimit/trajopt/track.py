@@ -71,7 +71,7 @@ class TrackOptions:
     q_start: np.ndarray | None = None
     footprints: np.ndarray | None = field(default=None)
     merge_distance: float = 0.02
-    initialisations: tuple[str, ...] = ("hold",)
+    initialisations: tuple[str, ...] = INITIALISATIONS
     progress: bool = False
 
     def __post_init__(self) -> None:
