@@ -60,6 +60,14 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
     assert best["robot_reward"] == max(c["robot_reward"] or 0.0 for c in selection["candidates"])
     record = json.loads((out / "trajectory.json").read_text())
     assert record["limit_violations"] == 0 and record["velocity_violations"] == 0
+    printed = capsys.readouterr()
+    lines = [line for line in printed.out.splitlines() if line.startswith("candidate ")]
+    assert len(lines) == len(selection["candidates"]) and all("rotation error median" in line for line in lines)
+    for line, entry in zip(lines, selection["candidates"]):
+        if entry["median_rotation_error_rad"] is not None:
+            assert f"rotation error median {np.degrees(entry['median_rotation_error_rad']):.0f} deg" in line
+            assert ("UPSIDE DOWN" in line) == entry["upside_down"] == (entry["median_rotation_error_rad"] > np.pi / 2)
+    assert ("tracked upside down" in printed.err) == record["upside_down"]
 
 
 def test_selection_needs_an_alignment(tmp_path, capsys, video_demos_dir):

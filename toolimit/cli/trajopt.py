@@ -134,12 +134,11 @@ def run(args: argparse.Namespace) -> int:
         from toolimit.viz.rerun_trajopt import save_trajectory_recording
 
         save_trajectory_recording(result, robot, args.rerun, targets.positions)
-    summary = result.summary()
-    print(
-        f"{args.robot}: time scale {result.time_scale:g}, J = {result.statistics['cost']:.4f}, "
-        f"position error median {summary['position_error_m']['median'] * 100:.1f} cm, "
-        f"limit violations {result.limit_violations}, velocity violations {result.velocity_violations}"
-    )
+    print(f"{args.robot}: {result.describe()}")
+    if result.upside_down:
+        print(f"note: the {args.tool} is tracked upside down (median rotation error "
+              f"{np.degrees(np.median(result.rotation_error)):.0f} deg): its position follows the targets, its "
+              "orientation does not (trajectory.json has the error at every step)", file=sys.stderr)
     written = f"wrote {args.out / 'trajectory.npz'} and {args.out / 'trajectory.json'}"
     if args.robot in SUPPORTED_ROBOTS:
         print(f"{written}; next: toolimit export --trajectory {args.out} --robot {args.robot} --out {args.out}_export")
@@ -161,8 +160,11 @@ def _select_by_robot(args: argparse.Namespace, robot, options, solve):
     selection = select_by_robot_execution(robot, candidates, tool, world, options, solve, seed=args.seed,
                                           progress=not args.quiet)
     save_json(args.out / "selection.json", selection.record(candidates))
-    rewards = ", ".join("refused" if r != r else f"{r:.1f}" for r in selection.robot_rewards)
-    print(f"robot replay reward per candidate: {rewards}")
+    for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):
+        if trajectory is None:
+            print(f"candidate {k}: refused ({selection.refusals[k]})")
+        else:
+            print(f"candidate {k}: robot replay reward {reward:.1f}; {trajectory.describe()}")
     if selection.best is None:
         print(f"no candidate's robot replay earned a goal reward; wrote {args.out / 'selection.json'}", file=sys.stderr)
         return None, None

@@ -70,6 +70,9 @@ class RobotSelection:
                     "robot_reward": None if np.isnan(reward) else float(reward),
                     "cost": None if trajectory is None else trajectory.statistics["cost"],
                     "time_scale": None if trajectory is None else trajectory.time_scale,
+                    "median_position_error_m": None if trajectory is None else float(np.median(trajectory.position_error)),
+                    "median_rotation_error_rad": None if trajectory is None else float(np.median(trajectory.rotation_error)),
+                    "upside_down": None if trajectory is None else trajectory.upside_down,
                     "refused": refusal,
                 }
                 for candidate, trajectory, reward, refusal in zip(
