@@ -138,9 +138,9 @@ def test_screening_replays_only_rewarded_samples_in_full():
 
 
 def test_a_crashed_search_resumes_from_its_checkpoint_with_the_same_result(tmp_path, monkeypatch):
-    import toolimit.align.search as search
-
     from align_fake_scene import CrashingScene
+
+    import toolimit.align.search as search
 
     monkeypatch.setattr(search, "CHECKPOINT_EVERY_S", 0.0)  # save after every chunk
     config = AlignmentConfig(samples=300, candidates=5, replays=3, chunk_size=10, element_std=0.05, ground_tolerance=10.0)

@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-
-from typing import TYPE_CHECKING
 
 from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE
 from toolimit.trajopt.problem import PoseTargets
