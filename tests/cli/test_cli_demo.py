@@ -64,3 +64,14 @@ def test_user_errors(capsys, tmp_path, monkeypatch, argv, fragment):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and fragment in err, err
     assert not any(tmp_path.iterdir())
+
+
+def test_show_of_a_demo_too_broken_to_clean_says_so(capsys, tmp_path):
+    from toolimit.demos import ToolDemo, save_demo
+
+    rng = np.random.default_rng(0)
+    head = rng.normal(size=(30, 3))
+    save_demo(ToolDemo(head, head + rng.normal(size=(30, 3)), 24.0, "spade"), tmp_path / "broken.npz")
+    assert main(["demo", "show", str(tmp_path / "broken.npz")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-2].startswith("as loaded (raw): ") and lines[-1].startswith("cleaned: not possible (")

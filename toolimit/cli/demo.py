@@ -52,12 +52,18 @@ def run_show(args: argparse.Namespace) -> int:
     from toolimit.align.keypoints import velocity_keypoints
     from toolimit.demos import clean_demo, load_demo
 
+    from toolimit.demos.tool_demo import DemoError
+
     demo = load_demo(args.path, tool=args.tool)
-    cleaned, report = clean_demo(demo)
     print(f"{args.path}: {demo.tool}, {demo.n_frames} frames at {demo.fps:g} fps ({demo.duration:.2f} s)")
     if demo.source:
         print(f"source: {demo.source}")
     print(f"as loaded (raw): {_motion(demo)}, keypoints (frames) {velocity_keypoints(demo).tolist()}")
+    try:
+        cleaned, report = clean_demo(demo)
+    except DemoError as error:  # `toolimit align` would refuse it the same way; --no-clean aligns it raw
+        print(f"cleaned: not possible ({error})")
+        return 0
     print(f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced): {_motion(cleaned)}, "
           f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}")
     return 0
