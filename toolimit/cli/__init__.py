@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except interrupts.Interrupted as stop:
-        print(f"toolimit {args.command}: interrupted ({stop.signal_name}); nothing more was written", file=sys.stderr)
+        print(f"toolimit {args.command}: interrupted ({stop.signal_name})", file=sys.stderr)
         return stop.exit_code
     except (CliError, ValueError, OSError, KeyError) as error:
         message = str(error) if not isinstance(error, KeyError) else f"missing key {error}"
