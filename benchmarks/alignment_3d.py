@@ -95,7 +95,8 @@ def run_one(run: DemoRun, args: argparse.Namespace) -> dict:
         replaced = len(report.replaced_frames)
     config = AlignmentConfig(samples=args.samples, candidates=args.candidates, z_offset_std=args.z_offset_std)
     load_before, cpu_before = os.getloadavg()[0], cpu_seconds()
-    result = align(demo, run.tool, "3d", config, seed=args.seed, workers=args.workers, progress=not args.quiet)
+    result = align(demo, run.tool, "3d", config, seed=args.seed, workers=args.workers, progress=not args.quiet,
+                   clean=False)  # cleaned above when run.clean
     cpu_time = cpu_seconds() - cpu_before
     best = result.best
     return {

@@ -47,7 +47,8 @@ def run_one(path: Path, args: argparse.Namespace) -> dict:
     if cleaned:
         demo, _ = clean_demo(demo)
     config = AlignmentConfig(samples=args.samples, candidates=args.candidates)
-    result = align(demo, demo.tool, "planar", config, seed=args.seed, workers=args.workers, progress=not args.quiet)
+    result = align(demo, demo.tool, "planar", config, seed=args.seed, workers=args.workers, progress=not args.quiet,
+                   clean=False)  # cleaned above unless asked not to
     best = result.best
     return {
         "demo": str(path.relative_to(REPO) if path.is_relative_to(REPO) else path.name),
@@ -81,7 +82,8 @@ def z_offset_ablation(args: argparse.Namespace, budget: int = 300) -> list[dict]
         for path in [REPO / "data" / "demos" / f"spade_0{i}.npz" for i in range(5)]:
             demo, _ = clean_demo(load_demo(path))
             config = AlignmentConfig(samples=budget, candidates=budget, z_offset_std=sigma)
-            result = align(demo, "spade", "planar", config, seed=args.seed, workers=args.workers, progress=False)
+            result = align(demo, "spade", "planar", config, seed=args.seed, workers=args.workers, progress=False,
+                           clean=False)
             rows.append({"demo": path.name, "z_offset_std": sigma, "samples": budget,
                          "candidates": len(result.candidates), "rejected": result.samples_rejected})
             print(f"sigma_z {sigma} m, {path.name}: {len(result.candidates)} candidates in {budget} samples "

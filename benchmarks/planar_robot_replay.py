@@ -42,7 +42,7 @@ def main() -> None:
         started = time.perf_counter()
         demo, _ = clean_demo(load_demo(ROOT / "data" / "demos" / f"spade_{i:02d}.npz"))
         result = align(demo, "spade", "planar", AlignmentConfig(candidates=args.candidates), seed=0,
-                       workers=args.workers, progress=False)
+                       workers=args.workers, progress=False, clean=False)
         candidates = []
         for candidate in result.candidates:
             _, _, poses = result.aligned_motion(candidate)

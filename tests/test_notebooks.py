@@ -21,6 +21,8 @@ NOTEBOOKS_DIR = Path(__file__).resolve().parents[1] / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOKS_DIR.glob("*.ipynb"))
 #: Seconds one cell may run under TOOLIMIT_QUICK=1.
 CELL_TIMEOUT_S = 300
+#: Largest executed notebook, bytes: 3D views are linked files, not pages copied into the notebook.
+MAX_EXECUTED_BYTES = 2_000_000
 #: Terminal colour codes in IPython tracebacks.
 ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -73,6 +75,10 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
         failure = ANSI_ESCAPE.sub("", str(error))
     if failure is not None:
         pytest.fail(f"{path.name} failed:\n{failure}", pytrace=False)
+    size = len(nbformat.writes(notebook).encode())
+    assert size < MAX_EXECUTED_BYTES, f"{path.name} weighs {size / 1e6:.1f} MB executed (limit 2 MB)"
+    printed = "".join(output.get("text", "") for cell in notebook.cells for output in cell.get("outputs", []))
+    assert "IProgress not found" not in printed, f"{path.name}: tqdm warns that ipywidgets is missing"
 
 
 if __name__ == "__main__":

@@ -35,7 +35,7 @@ def spade_demo(repo_root):
 
 @pytest.fixture(scope="module")
 def one_worker(spade_demo) -> AlignmentResult:
-    return align(spade_demo, "spade", "3d", CONFIG, seed=SEED, workers=1, progress=False)
+    return align(spade_demo, "spade", "3d", CONFIG, seed=SEED, workers=1, progress=False, clean=False)
 
 
 def summary(result: AlignmentResult) -> tuple:
@@ -78,7 +78,7 @@ def test_same_3d_result_with_two_workers(spade_demo):
     # Eight samples, one per chunk, so that both workers replay some; the search may stop earlier
     # at its second candidate: then both runs must stop there.
     config = AlignmentConfig(samples=8, candidates=2, replays=3, chunk_size=1)
-    one = align(spade_demo, "spade", "3d", config, seed=SEED, workers=1, progress=False)
-    two = align(spade_demo, "spade", "3d", config, seed=SEED, workers=2, progress=False)
+    one = align(spade_demo, "spade", "3d", config, seed=SEED, workers=1, progress=False, clean=False)
+    two = align(spade_demo, "spade", "3d", config, seed=SEED, workers=2, progress=False, clean=False)
     assert one.candidates, "seed SEED should give a candidate within 3 samples (see the module docstring)"
     assert summary(two) == summary(one)

@@ -138,9 +138,9 @@ def test_screening_replays_only_rewarded_samples_in_full():
 
 
 def test_a_crashed_search_resumes_from_its_checkpoint_with_the_same_result(tmp_path, monkeypatch):
-    import toolimit.align.search as search
-
     from align_fake_scene import CrashingScene
+
+    import toolimit.align.search as search
 
     monkeypatch.setattr(search, "CHECKPOINT_EVERY_S", 0.0)  # save after every chunk
     config = AlignmentConfig(samples=300, candidates=5, replays=3, chunk_size=10, element_std=0.05, ground_tolerance=10.0)
@@ -170,3 +170,37 @@ def test_demo_preparation_uses_the_worlds_plane():
     assert plane == "xy" and np.array_equal(same.head, tilted.head)
     spatial, plane = prepare_demo(tilted, "spade", "3d", 1 / 24)
     assert plane is None and np.array_equal(spatial.head, tilted.head)
+
+
+def test_align_cleans_the_demo_by_default_like_the_cli():
+    from toolimit.demos import ToolDemo, clean_demo
+
+    smooth = make_demo()
+    jump = np.zeros_like(smooth.head)
+    jump[20, 2] = 0.3  # an outlier frame, as a reconstruction gives
+    noisy = ToolDemo(smooth.head + jump, smooth.handle + jump, smooth.fps, "spade")
+    config = AlignmentConfig(samples=16, candidates=1, replays=2, chunk_size=16, ground_tolerance=10.0)
+    default = align(noisy, "spade", "planar", config, progress=False, scene_factory=FakeTargetScene)
+    assert default.cleaning is not None and 20 in default.cleaning.replaced_frames.tolist()
+    cleaned, _ = clean_demo(noisy)
+    by_hand = align(cleaned, "spade", "planar", config, progress=False, scene_factory=FakeTargetScene, clean=False)
+    assert by_hand.cleaning is None
+    np.testing.assert_array_equal(default.demo.head, by_hand.demo.head)
+    np.testing.assert_array_equal(default.keypoints, by_hand.keypoints)
+    raw = align(noisy, "spade", "planar", config, progress=False, scene_factory=FakeTargetScene, clean=False)
+    assert not np.array_equal(raw.demo.head, default.demo.head)
+
+
+def test_pose_targets_from_an_alignment_are_what_trajopt_reads(tmp_path):
+    from toolimit.align.outputs import write_alignment
+    from toolimit.trajopt import load_pose_targets, targets_from_alignment
+
+    result = run()
+    write_alignment(result, tmp_path, "demo.npz")
+    from_file = load_pose_targets(tmp_path / "aligned_demo.npz")
+    targets = targets_from_alignment(result)
+    np.testing.assert_allclose(targets.positions, from_file.positions, atol=1e-12)
+    np.testing.assert_allclose(targets.rotations, from_file.rotations, atol=1e-9)
+    assert targets.fps == from_file.fps
+    second = targets_from_alignment(result, result.candidates[1])
+    assert not np.allclose(second.positions, targets.positions) or result.best is result.candidates[1]

@@ -66,6 +66,16 @@ def test_bad_numbers_are_user_errors(capsys, tmp_path, demo_file, extra, fragmen
     assert_user_error(capsys, align_args(demo_file, out, *extra), fragment, out)
 
 
+@pytest.mark.parametrize("where", ["file_parent", "proc"])
+def test_an_unwritable_out_is_refused_before_any_work(capsys, tmp_path, demo_file, where):
+    if where == "file_parent":
+        (tmp_path / "plain").write_text("a file")
+        out, fragment = tmp_path / "plain" / "run", f"{tmp_path / 'plain'} is a file, not a folder"
+    else:
+        out, fragment = Path("/proc/toolimit/run"), "cannot write in /proc/toolimit/run"
+    assert_user_error(capsys, align_args(demo_file, out, "--samples", "20000"), fragment, out)
+
+
 def test_unknown_tool_and_world(capsys, tmp_path, demo_file):
     out = tmp_path / "run"
     argv = align_args(demo_file, out)
@@ -93,6 +103,9 @@ def test_writes_record_and_aligned_demo(capsys, tmp_path, demo_file):
     assert main(align_args(demo_file, out, "--samples", "300", "--candidates", "3", "--seed", "4", clean=True)) == 0
     printed = capsys.readouterr().out
     assert "cleaned demo" in printed and "best: sample" in printed
+    assert printed.splitlines()[-1] == (
+        f"wrote {out / 'alignment.json'}, {out / 'candidates.npz'} and {out / 'aligned_demo.npz'}; next: "
+        f"toolimit trajopt --robot planar3 --tool spade --alignment {out} --out {out}_planar3")
     record = json.loads((out / "alignment.json").read_text())
     for key in ("tool", "world", "demo", "seed", "samples_tried", "samples_rejected", "wall_time_s", "candidates"):
         assert key in record

@@ -28,7 +28,24 @@ def test_synth_fps_and_show_summary(capsys, tmp_path):
     printed = capsys.readouterr().out
     demo = load_demo(out)
     assert f"{demo.n_frames} frames at 30 fps" in printed
-    assert "keypoints (frames): [0," in printed and f"{demo.n_frames - 1}]" in printed
+    assert "keypoints (frames) [0," in printed and f"{demo.n_frames - 1}]" in printed
+
+
+def test_show_says_raw_and_cleaned(capsys, repo_root):
+    from toolimit.align.keypoints import velocity_keypoints
+    from toolimit.demos import clean_demo
+
+    path = repo_root / "data" / "demos" / "spade_00.npz"
+    assert main(["demo", "show", str(path)]) == 0
+    raw_line, clean_line = capsys.readouterr().out.splitlines()[-2:]
+    raw = load_demo(path)
+    cleaned, report = clean_demo(raw)
+    assert raw_line.startswith("as loaded (raw): ")
+    assert raw_line.endswith(f"keypoints (frames) {velocity_keypoints(raw).tolist()}")
+    assert clean_line.startswith(f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced)")
+    assert clean_line.endswith(f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}")
+    assert f"peak speed {raw.speed().max():.2f} m/s" in raw_line
+    assert f"peak speed {cleaned.speed().max():.2f} m/s" in clean_line
 
 
 @pytest.mark.parametrize(
@@ -47,3 +64,14 @@ def test_user_errors(capsys, tmp_path, monkeypatch, argv, fragment):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and fragment in err, err
     assert not any(tmp_path.iterdir())
+
+
+def test_show_of_a_demo_too_broken_to_clean_says_so(capsys, tmp_path):
+    from toolimit.demos import ToolDemo, save_demo
+
+    rng = np.random.default_rng(0)
+    head = rng.normal(size=(30, 3))
+    save_demo(ToolDemo(head, head + rng.normal(size=(30, 3)), 24.0, "spade"), tmp_path / "broken.npz")
+    assert main(["demo", "show", str(tmp_path / "broken.npz")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-2].startswith("as loaded (raw): ") and lines[-1].startswith("cleaned: not possible (")

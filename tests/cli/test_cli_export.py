@@ -31,23 +31,41 @@ def test_export_writes_csv_and_json(tmp_path, capsys):
     code = main(["export", "--trajectory", str(_trajectory_dir(tmp_path, 4.0)), "--robot", "panda", "--out", str(out),
                  "--rate", "500"])
     assert code == 0
-    assert sorted(path.name for path in out.iterdir()) == [
-        "joint_trajectory.json", "joint_trajectory_control_rate.csv", "joint_trajectory_resampled.csv"]
+    assert sorted(path.name for path in out.iterdir()) == ["joint_trajectory.csv", "joint_trajectory.json"]
     summary = json.loads((out / "joint_trajectory.json").read_text())
-    assert summary["resampled_rate_hz"] == 500.0 and summary["n_resampled_samples"] == 2001
-    assert "all limits respected" in capsys.readouterr().out
+    assert summary["rate_hz"] == 500.0 and summary["n_samples"] == 2012  # 4 s + two end spans of dt / 4, up to the next 2 ms
+    printed = capsys.readouterr().out
+    assert re.search(r"retimed within panda's limits: 4\.021 s against 4\.000 s optimised \(1\.01x\)", printed)
+    assert printed.splitlines()[-1].startswith(f"wrote {out / 'joint_trajectory.csv'} (2012 samples at 500 Hz)")
+
+
+def test_a_too_fast_trajectory_is_slowed_down(tmp_path, capsys):
+    code = main(["export", "--trajectory", str(_trajectory_dir(tmp_path, 0.5)), "--robot", "panda",
+                 "--out", str(tmp_path / "robot")])
+    assert code == 0
+    duration, optimised = re.search(r"(\d+\.\d+) s against (\d+\.\d+) s optimised", capsys.readouterr().out).groups()
+    assert float(optimised) == 0.5 and float(duration) > 1.0
+
+
+def _outside_dir(tmp_path):
+    directory = _trajectory_dir(tmp_path, 4.0)
+    with np.load(directory / "trajectory.npz") as arrays:
+        q = arrays["q"].copy()
+    q[30:40, 5] = 3.8  # joint 6 beyond its 3.7525 rad limit
+    save_npz(directory / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.zeros(3), joint_names=JOINTS, dt=DT)
+    return directory
 
 
 @pytest.mark.parametrize(
-    ("duration", "robot", "message"),
+    ("make", "robot", "message"),
     [
-        (0.5, "panda", r"refusing to export: panda_joint\d (velocity|acceleration|jerk) .* at t = .*--time-scale"),
-        (4.0, "ur5", r"only robots with published .* 'ur5'"),
+        (_outside_dir, "panda", r"panda_joint6 position 3\.8 rad at sample 30 .*no retiming can fix"),
+        (lambda tmp_path: _trajectory_dir(tmp_path, 4.0), "ur5", r"only robots with published .* 'ur5'"),
     ],
 )
-def test_refusals_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, duration, robot, message):
+def test_refusals_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, make, robot, message):
     out = tmp_path / "robot"
-    trajectory = str(_trajectory_dir(tmp_path, duration))
+    trajectory = str(make(tmp_path))
     code = main(["export", "--trajectory", trajectory, "--robot", robot, "--out", str(out)])
     assert code == 2
     error = capsys.readouterr().err

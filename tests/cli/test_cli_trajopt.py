@@ -47,7 +47,31 @@ def test_poses_file_gives_a_trajectory(tmp_path, capsys):
     assert result.limit_violations == 0 and result.velocity_violations == 0
     assert np.median(result.position_error) < 0.02
     assert (tmp_path / "view.rrd").stat().st_size > 0
-    assert "planar3: time scale 1" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "planar3: time scale 1" in printed
+    assert printed.splitlines()[-1].startswith(f"wrote {out / 'trajectory.npz'} and {out / 'trajectory.json'} (export")
+
+
+def test_unknown_robot_is_a_one_line_error(capsys, tmp_path):
+    poses = _write_poses(tmp_path / "poses.npz")
+    argv = _args(["--poses", str(poses)], tmp_path / "out")
+    argv[argv.index("planar3")] = "kuka"
+    assert_user_error(capsys, argv, "--robot: unknown robot 'kuka'; choose one of planar3, panda", tmp_path / "out")
+
+
+def test_usage_errors_are_one_line(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["trajopt", "--robot", "panda", "--tool", "spade", "--poses", "p.npz", "--init", "sideways", "--out", "o"])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("toolimit trajopt: error: argument --init: invalid choice"), err
+
+
+def test_an_unwritable_out_is_refused_before_any_work(capsys, tmp_path):
+    (tmp_path / "plain").write_text("a file")
+    poses = _write_poses(tmp_path / "poses.npz")
+    out = tmp_path / "plain" / "out"
+    assert_user_error(capsys, _args(["--poses", str(poses)], out), "is a file, not a folder", out)
 
 
 def test_alignment_folder_and_auto_time_scale(tmp_path):

@@ -21,16 +21,6 @@ def bump(amplitude: float, omega: float, times: np.ndarray) -> np.ndarray:
     return amplitude * (1.0 - np.cos(omega * times)) ** 2 / 4.0
 
 
-def bump_peaks(amplitude: float, omega: float) -> dict[str, float]:
-    """Exact peak |velocity|, |acceleration|, |jerk| of :func:`bump` (from its closed-form derivatives)."""
-    x = np.linspace(0.0, 2.0 * np.pi, 200001)
-    return {
-        "velocity": amplitude * omega / 2.0 * np.max(np.abs((1.0 - np.cos(x)) * np.sin(x))),
-        "acceleration": amplitude * omega**2 / 2.0 * np.max(np.abs(np.cos(x) - np.cos(2.0 * x))),
-        "jerk": amplitude * omega**3 / 2.0 * np.max(np.abs(-np.sin(x) + 2.0 * np.sin(2.0 * x))),
-    }
-
-
 @pytest.fixture
 def write_trajectory(tmp_path: Path) -> Callable[..., Path]:
     """Write DIR/trajectory.npz for q (T+1, 7) sampled every dt; returns DIR."""

@@ -1,4 +1,5 @@
-"""Real-robot export: limit checks (each quantity), files and their content, atomic behaviour."""
+"""Real-robot export: retiming within the published limits (checked independently by finite
+differences of the written CSV), refusals, files and their content, atomic behaviour."""
 
 from __future__ import annotations
 
@@ -7,19 +8,19 @@ import json
 
 import numpy as np
 import pytest
-from conftest import PANDA_JOINTS, PANDA_MIDDLE, bump, bump_peaks, slow_smooth
+from conftest import PANDA_JOINTS, PANDA_MIDDLE, bump, slow_smooth
 
 from toolimit.deploy import (
-    LimitViolation,
+    PathOutsideLimits,
     export_trajectory,
-    fit_joint_spline,
     load_trajectory,
-    minimal_time_scale,
     published_limits,
+    retime,
 )
-from toolimit.deploy.export import CONTROL_CSV, RESAMPLED_CSV, SUMMARY_JSON
+from toolimit.deploy.export import SUMMARY_JSON, TRAJECTORY_CSV
 
 DT = 1.0 / 24.0
+PANDA = published_limits("panda")
 
 
 def _read_csv(path):
@@ -28,126 +29,130 @@ def _read_csv(path):
     return rows[0], np.array(rows[1:], dtype=float)
 
 
-def test_accepts_a_slow_smooth_trajectory_and_writes_csv_and_json(write_trajectory, tmp_path):
-    q = slow_smooth()
-    trajectory = load_trajectory(write_trajectory(q, DT))
+def _assert_within_limits_by_finite_differences(times: np.ndarray, q: np.ndarray) -> dict[str, float]:
+    """Position, and velocity / acceleration / jerk from finite differences of the positions (with
+    the robot at rest before the start and after the end), against the Panda's published limits;
+    returns each quantity's peak |value| / limit."""
+    step = np.diff(times)
+    np.testing.assert_allclose(step, step[0], rtol=1e-6)
+    h = step[0]
+    padded = np.concatenate([np.repeat(q[:1], 3, axis=0), q, np.repeat(q[-1:], 3, axis=0)])
+    assert np.all(q >= PANDA.position_lower) and np.all(q <= PANDA.position_upper)
+    peaks = {}
+    for order, name in ((1, "velocity"), (2, "acceleration"), (3, "jerk")):
+        ratio = np.abs(np.diff(padded, order, axis=0)) / h**order / getattr(PANDA, name)
+        peaks[name] = float(ratio.max())
+        assert peaks[name] <= 1.0 + 1e-6, f"{name} reaches {peaks[name]:.4f} x its limit"
+    return peaks
+
+
+def _export(write_trajectory, tmp_path, q, dt=DT, **kwargs):
     out = tmp_path / "export"
-    plan = export_trajectory(trajectory, "panda", out, rate=1000.0)
-    assert plan.passed
-
-    header, control = _read_csv(out / CONTROL_CSV)
+    plan = export_trajectory(load_trajectory(write_trajectory(q, dt)), "panda", out, **kwargs)
+    header, table = _read_csv(out / TRAJECTORY_CSV)
     assert header == ["time_s", *PANDA_JOINTS]
-    np.testing.assert_allclose(control[:, 0], DT * np.arange(len(q)), atol=1e-9)
-    np.testing.assert_allclose(control[:, 1:], q, atol=1e-9)
-
-    header, resampled = _read_csv(out / RESAMPLED_CSV)
-    assert header == ["time_s", *PANDA_JOINTS]
-    assert len(resampled) == 4001  # 4 s at 1 kHz, both ends included
-    np.testing.assert_allclose(np.diff(resampled[:, 0]), 1e-3, atol=1e-9)
-    np.testing.assert_allclose(resampled[0, 1:], q[0], atol=1e-9)
-    np.testing.assert_allclose(resampled[-1, 1:], q[-1], atol=1e-9)
-    # 1 kHz samples that coincide with control samples (every 125 ms = 3 control steps) equal them
-    np.testing.assert_allclose(resampled[::125, 1:], q[::3], atol=1e-9)
-
     summary = json.loads((out / SUMMARY_JSON).read_text())
+    return plan, table[:, 0], table[:, 1:], summary
+
+
+def test_a_slow_smooth_trajectory_keeps_its_timing(write_trajectory, tmp_path):
+    q = slow_smooth()
+    plan, times, positions, summary = _export(write_trajectory, tmp_path, q)
+    peaks = _assert_within_limits_by_finite_differences(times, positions)
+    assert peaks["velocity"] < 0.5
+    # nothing to slow down: the duration is the optimised 4 s plus the two end spans (2 dt / 4)
+    assert summary["optimised_duration_s"] == pytest.approx(4.0)
+    assert summary["duration_s"] == pytest.approx(4.0 + 2 * DT / 4)
+    assert len(times) == round(summary["duration_s"] * 1000) + 1 and summary["rate_hz"] == 1000.0
+    np.testing.assert_allclose(positions[0], q[0], atol=1e-12)
+    np.testing.assert_allclose(positions[-1], q[-1], atol=1e-12)
+    assert summary["path_deviation_rad"] < 1e-3  # a smooth path is followed closely
     assert summary["joint_names"] == list(PANDA_JOINTS)
-    assert summary["resampled_rate_hz"] == 1000.0
-    assert summary["control_rate_hz"] == pytest.approx(24.0)
-    assert summary["units"]["jerk"] == "rad/s^3"
-    assert summary["limits"]["acceleration_rad_s2"] == [15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0]
     assert summary["limits"]["jerk_rad_s3"] == [7500.0, 3750.0, 5000.0, 6250.0, 7500.0, 10000.0, 10000.0]
     assert all(check["passed"] for check in summary["checks"].values())
-    # joint 7 moves fastest (0.6 rad bump in 4 s)
-    expected_ratio = bump_peaks(0.6, np.pi / 2)["velocity"] / 2.61
-    assert summary["checks"]["velocity"]["max_ratio"] == pytest.approx(expected_ratio, rel=0.01)
-    assert summary["checks"]["velocity"]["worst_joint"] == "panda_joint7"
+    assert summary["checks"]["velocity"]["max_ratio"] == pytest.approx(peaks["velocity"], rel=0.01)
     assert summary["base"]["yaw_rad"] == 1.5
+    assert plan.path.duration == summary["duration_s"]
 
 
-def test_resampled_trajectory_passes_through_the_control_samples_and_starts_and_ends_at_rest():
-    q = slow_smooth()
-    spline = fit_joint_spline(q, DT)
-    times = DT * np.arange(len(q))
-    np.testing.assert_allclose(spline.derivative(times, 0), q, atol=1e-12)
-    for order in (1, 2):
-        np.testing.assert_allclose(spline.derivative(times[[0, -1]], order), 0.0, atol=1e-9)
-    np.testing.assert_array_equal(spline.derivative(np.array([times[-1] + 1.0]), 0)[0], q[-1])
+def _bang_bang_into_the_limit(dt: float = DT) -> np.ndarray:
+    """Joint 3 runs at its velocity limit onto its upper position limit, turns back in one step and
+    runs back (the profile trajectory optimisation gives at its limits); joint 5 zigzags at its limit."""
+    upper, speed = PANDA.position_upper[2], PANDA.velocity[2]
+    steps = 24
+    there = upper - speed * dt * np.arange(steps, -1, -1)
+    q = np.tile(PANDA_MIDDLE, (2 * steps + 1, 1))
+    q[:, 2] = np.concatenate([there, there[-2::-1]])
+    q[:, 4] += PANDA.velocity[4] * dt * np.where(np.arange(len(q)) % 2 == 0, 0.0, 1.0)
+    return q
 
 
-def test_refuses_a_position_violation(write_trajectory, tmp_path):
+def test_a_trajectory_at_the_velocity_limits_touching_a_position_limit_is_retimed(write_trajectory, tmp_path):
+    q = _bang_bang_into_the_limit()
+    assert q[:, 2].max() == PANDA.position_upper[2]
+    _, times, positions, summary = _export(write_trajectory, tmp_path, q)
+    peaks = _assert_within_limits_by_finite_differences(times, positions)
+    assert positions[:, 2].max() <= PANDA.position_upper[2]  # no overshoot past the limit
+    assert peaks["acceleration"] > 0.95  # slowed down just enough: the binding limit is reached
+    assert summary["duration_s"] > summary["optimised_duration_s"]
+    # the exported path passes within the reported deviation of every optimised sample
+    gaps = np.abs(positions[None, :, :] - q[:, None, :]).max(axis=2).min(axis=1)
+    assert gaps.max() <= summary["path_deviation_rad"] + 1e-3
+    assert summary["path_deviation_rad"] < 0.25 * np.abs(np.diff(q, 2, axis=0)).max()
+
+
+def test_more_subdivisions_stay_closer_to_the_samples_and_take_longer(write_trajectory, tmp_path):
+    q = _bang_bang_into_the_limit()
+    coarse, fine = (retime(q, DT, PANDA, subdivisions=m) for m in (1, 8))
+    assert fine.path_deviation < coarse.path_deviation / 4
+    assert fine.duration > coarse.duration
+    samples = fine.sample(2000.0)
+    _assert_within_limits_by_finite_differences(samples.times, samples.position)
+
+
+def test_only_the_fast_part_is_slowed_down():
+    gentle = slow_smooth(duration=4.0)
+    times = DT * np.arange(13)
+    burst = gentle[-1] + np.outer(bump(1.0, 2 * np.pi / times[-1], times), [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.8])
+    q = np.concatenate([gentle, burst[1:]])  # 4 s gentle, then joint 7 out and back in 0.5 s (far too fast)
+    path = retime(q, DT, PANDA)
+    samples = path.sample(1000.0)
+    _assert_within_limits_by_finite_differences(samples.times, samples.position)
+    burst_alone = retime(burst, DT, PANDA).duration
+    assert burst_alone > 2 * 0.5  # the burst needs at least twice its time
+    assert path.duration < 4.0 + burst_alone + 0.1  # the gentle 4 s are not slowed down
+    uniform = 4.5 * burst_alone / 0.5  # the burst's stretch applied to the whole motion
+    assert path.duration < 0.5 * uniform
+    gentle_alone = retime(gentle, DT, PANDA).derivative(np.array([2.0]), 0)[0]
+    np.testing.assert_allclose(samples.position[2000], gentle_alone, atol=1e-6)  # same timing at t = 2 s
+
+
+def test_too_fast_everywhere_is_retimed_and_respects_every_limit(write_trajectory, tmp_path):
+    fast = slow_smooth(duration=0.5)  # the 4 s path in 0.5 s
+    _, times, positions, summary = _export(write_trajectory, tmp_path, fast)
+    _assert_within_limits_by_finite_differences(times, positions)
+    assert summary["duration_s"] > 1.5 * summary["optimised_duration_s"]
+
+
+def test_refuses_a_path_sample_outside_a_position_limit(write_trajectory, tmp_path):
     q = slow_smooth()
     q[:, 3] = -1.5 + bump(1.5, 2 * np.pi / 4.0, DT * np.arange(len(q)))  # joint 4 up to 0 at 2 s > -0.0698
-    message = r"panda_joint4 position .* at t = 2\.0000 s is outside its limit -0\.0698"
-    with pytest.raises(LimitViolation, match=message) as error:
+    message = (r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0698 rad "
+               r"by 0\.0698 rad .*no retiming can fix .*\(9 of 97 samples are outside\)")
+    with pytest.raises(PathOutsideLimits, match=message):
         export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
-    assert error.value.minimal_time_scale is None
-    assert "slowing down cannot fix" in str(error.value)
     assert not (tmp_path / "out").exists()
-
-
-def _only_failing(checks, quantity):
-    by_quantity = {check.quantity: check for check in checks}
-    assert [name for name, check in by_quantity.items() if not check.passed] == [quantity]
-    return by_quantity[quantity]
-
-
-def test_refuses_a_velocity_violation_and_offers_a_time_scale(write_trajectory, tmp_path):
-    times = DT * np.arange(111)  # one period of 110 steps
-    omega = 2 * np.pi / times[-1]
-    q = np.tile(PANDA_MIDDLE, (len(times), 1))
-    q[:, 0] = -1.4 + bump(2.8, omega, times)  # joint 1: 2.49 rad/s > 2.175 at a third of the period
-    trajectory = load_trajectory(write_trajectory(q, DT))
-    message = r"panda_joint1 velocity 2\.4\d* rad/s at t = 1\.5\d* s exceeds the limit \+-2\.175"
-    with pytest.raises(LimitViolation, match=message) as error:
-        export_trajectory(trajectory, "panda", tmp_path / "out")
-    peak = bump_peaks(2.8, omega)["velocity"]
-    assert _only_failing(error.value.checks, "velocity").ratio == pytest.approx(peak / 2.175, rel=1e-3)
-    scale = error.value.minimal_time_scale
-    assert scale == pytest.approx(peak / 2.175, abs=2e-3)
-    assert not (tmp_path / "out").exists()
-    # the offered time scale passes, and slightly below it does not
-    assert export_trajectory(trajectory, "panda", tmp_path / "out", time_scale=scale).passed
-    with pytest.raises(LimitViolation):
-        export_trajectory(trajectory, "panda", tmp_path / "out2", time_scale=scale - 2e-3)
-
-
-def test_refuses_an_acceleration_violation(write_trajectory, tmp_path):
-    times = DT * np.arange(97)  # 8 periods of 12 steps (0.5 s)
-    q = np.tile(PANDA_MIDDLE, (len(times), 1))
-    q[:, 1] += bump(0.1, 4 * np.pi, times)  # joint 2: 15.8 rad/s^2 > 7.5 (0.8 rad/s, 0.4 of the jerk limit)
-    message = r"panda_joint2 acceleration -15\.\d* rad/s\^2 at t = .* exceeds the limit \+-7\.5 "
-    with pytest.raises(LimitViolation, match=message) as error:
-        export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
-    peak = bump_peaks(0.1, 4 * np.pi)["acceleration"]
-    assert _only_failing(error.value.checks, "acceleration").ratio == pytest.approx(peak / 7.5, rel=0.02)
-
-
-def test_refuses_a_jerk_violation(write_trajectory, tmp_path):
-    dt = 5e-4  # a finely sampled vibration: 20 periods of 12 samples (6 ms), 5 micro-rad
-    times = dt * np.arange(241)
-    omega = 2 * np.pi / (12 * dt)
-    q = np.tile(PANDA_MIDDLE, (len(times), 1))
-    q[:, 1] += bump(5e-6, omega, times)  # joint 2: 5.5 rad/s^2 < 7.5 but 7850 rad/s^3 > 3750
-    message = r"panda_joint2 jerk .* rad/s\^3 at t = .* exceeds the limit \+-3750 "
-    with pytest.raises(LimitViolation, match=message) as error:
-        export_trajectory(load_trajectory(write_trajectory(q, dt)), "panda", tmp_path / "out", rate=20000.0)
-    peak = bump_peaks(5e-6, omega)["jerk"]
-    assert _only_failing(error.value.checks, "jerk").ratio == pytest.approx(peak / 3750, rel=0.05)
 
 
 def test_a_refused_export_leaves_existing_files_untouched(write_trajectory, tmp_path):
     out = tmp_path / "out"
     export_trajectory(load_trajectory(write_trajectory(slow_smooth(), DT)), "panda", out)
     before = {path.name: path.read_bytes() for path in out.iterdir()}
-    fast = slow_smooth(duration=0.5)  # the same path in 0.5 s: far too fast
-    with pytest.raises(LimitViolation):
-        export_trajectory(load_trajectory(write_trajectory(fast, DT, name="fast")), "panda", out)
+    q = slow_smooth()
+    q[10, 0] = 3.0  # beyond 2.8973
+    with pytest.raises(PathOutsideLimits, match="panda_joint1 position 3 rad at sample 10"):
+        export_trajectory(load_trajectory(write_trajectory(q, DT, name="bad")), "panda", out)
     assert {path.name: path.read_bytes() for path in out.iterdir()} == before
-
-
-def test_minimal_time_scale_is_one_for_a_passing_trajectory(write_trajectory):
-    trajectory = load_trajectory(write_trajectory(slow_smooth(), DT))
-    assert minimal_time_scale(trajectory, published_limits("panda")) == 1.0
 
 
 def test_unsupported_robot_and_bad_files_are_refused(write_trajectory, tmp_path):
@@ -171,16 +176,9 @@ def test_unsupported_robot_and_bad_files_are_refused(write_trajectory, tmp_path)
              joint_names=np.array([f"j{i}" for i in range(7)]), dt=DT)
     with pytest.raises(ValueError, match="do not match panda's joints"):
         export_trajectory(load_trajectory(bad), "panda", tmp_path / "out")
+    with pytest.raises(ValueError, match="subdivisions must be a positive integer"):
+        retime(q, DT, PANDA, subdivisions=0)
     assert not (tmp_path / "out").exists()
-
-
-def test_overshoot_between_samples_at_a_limit_is_explained(write_trajectory, tmp_path):
-    """Samples that stop exactly at a limit make the interpolant overshoot: refused, and the message says why."""
-    q = slow_smooth(duration=2.0)
-    upper = published_limits("panda").position_upper[0]
-    q[:, 0] = np.minimum(np.linspace(0.0, 2 * upper, len(q)), upper)  # joint 1 runs into its limit and stays
-    with pytest.raises(LimitViolation, match="panda_joint1 position .*interpolant overshoots between samples"):
-        export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
 
 
 def test_a_failed_write_leaves_no_partial_export(write_trajectory, tmp_path):

@@ -137,3 +137,23 @@ def test_replay_in_the_planar_hammer_scene():
     on_board = {"nail_position": np.array([base[0], 0.0, 0.1])}
     with pytest.raises(ValueError, match="stands inside scene element"):
         execute_in_scene(arm, exact, scene, on_board, np.random.default_rng(0))
+
+
+def test_a_result_turned_half_a_turn_is_described_as_upside_down():
+    from toolimit.trajopt import TrajectoryResult
+
+    horizon = 6
+    def result(rotation_error):
+        return TrajectoryResult(
+            robot="planar3", tool="spade", joint_names=("a", "b", "c"), q=np.zeros((horizon + 1, 3)),
+            v=np.zeros((horizon, 3)), base=np.zeros(3), dt=0.1, time_scale=1.0,
+            position_error=np.full(horizon, 0.002), rotation_error=rotation_error,
+            limit_margin=np.ones((horizon + 1, 3)), velocity_ratio=np.zeros((horizon, 3)), statistics={"cost": 1.0},
+        )
+    flipped = result(np.full(horizon, np.pi))
+    assert flipped.upside_down and flipped.summary()["upside_down"]
+    assert "position error median 0.2 cm, rotation error median 180 deg" in flipped.describe()
+    assert "UPSIDE DOWN" in flipped.describe()
+    upright = result(np.r_[np.full(4, 0.1), np.full(2, np.pi)])  # two flipped steps of six: not upside down
+    assert not upright.upside_down and "rotation error median 6 deg" in upright.describe()
+    assert "UPSIDE" not in upright.describe()

@@ -11,7 +11,7 @@ from toolimit.align import AlignmentConfig
 from toolimit.align.outputs import CANDIDATES_NPZ, write_alignment
 from toolimit.align.search import align
 from toolimit.cli import main
-from toolimit.demos import clean_demo, load_demo
+from toolimit.demos import load_demo
 from toolimit.trajopt.selection import load_candidates
 
 
@@ -19,8 +19,7 @@ from toolimit.trajopt.selection import load_candidates
 def spade_alignment(tmp_path_factory, repo_root):
     """A planar alignment of a shipped spade demo (5 candidates, seed 0)."""
     demo_path = repo_root / "data" / "demos" / "spade_04.npz"
-    demo, _ = clean_demo(load_demo(demo_path))
-    result = align(demo, "spade", "planar", AlignmentConfig(candidates=5), seed=0, progress=False)
+    result = align(load_demo(demo_path), "spade", "planar", AlignmentConfig(candidates=5), seed=0, progress=False)
     out = tmp_path_factory.mktemp("align")
     write_alignment(result, out, str(demo_path))
     return result, out
@@ -61,6 +60,14 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
     assert best["robot_reward"] == max(c["robot_reward"] or 0.0 for c in selection["candidates"])
     record = json.loads((out / "trajectory.json").read_text())
     assert record["limit_violations"] == 0 and record["velocity_violations"] == 0
+    printed = capsys.readouterr()
+    lines = [line for line in printed.out.splitlines() if line.startswith("candidate ")]
+    assert len(lines) == len(selection["candidates"]) and all("rotation error median" in line for line in lines)
+    for line, entry in zip(lines, selection["candidates"]):
+        if entry["median_rotation_error_rad"] is not None:
+            assert f"rotation error median {np.degrees(entry['median_rotation_error_rad']):.0f} deg" in line
+            assert ("UPSIDE DOWN" in line) == entry["upside_down"] == (entry["median_rotation_error_rad"] > np.pi / 2)
+    assert ("tracked upside down" in printed.err) == record["upside_down"]
 
 
 def test_selection_needs_an_alignment(tmp_path, capsys, video_demos_dir):

@@ -14,6 +14,9 @@ from trajopt_helpers import FPS, reachable_path, targets_of
 QUICK = SqpOptions(max_iterations=15)
 
 
+#: One joint initialisation per base start: these tests count and compare the starts themselves.
+HOLD = ("hold",)
+
 def test_base_guesses_follow_the_benchmark_scheme():
     """PROBLEM.md: ring of 8 at 0.6 m around the targets' centre, guess 0 towards the origin, and
     the tip of the start pose on the ray from the base to the centre."""
@@ -60,7 +63,8 @@ def test_multistart_keeps_the_best_start(planar3):
     path, targets = _reachable_targets(planar3, np.array([0.3, 0.0, 0.0]))
     guesses = np.array([[-2.0, 0, 0], [0.32, 0, 0], [2.5, 0, 0]])
     one_step = SqpOptions(max_iterations=1)  # each start stays in its own neighbourhood
-    result = track(planar3, targets, TrackOptions(sqp=one_step, q_start=path[0], merge_distance=0.0), guesses=guesses)
+    options = TrackOptions(sqp=one_step, q_start=path[0], merge_distance=0.0, initialisations=HOLD)
+    result = track(planar3, targets, options, guesses=guesses)
     costs = result.statistics["start_costs"]
     assert len(costs) == 3
     assert result.statistics["cost"] == min(costs)
@@ -73,7 +77,7 @@ def test_multistart_keeps_the_best_start(planar3):
 def test_runs_joining_a_converged_basin_stop_early(planar3):
     path, targets = _reachable_targets(planar3, np.array([0.3, 0.0, 0.0]))
     guesses = np.array([[0.31, 0, 0], [0.29, 0, 0]])
-    options = TrackOptions(sqp=SqpOptions(), q_start=path[0], merge_distance=0.05)
+    options = TrackOptions(sqp=SqpOptions(), q_start=path[0], merge_distance=0.05, initialisations=HOLD)
     result = track(planar3, targets, options, guesses=guesses)
     assert result.statistics["starts_merged"] == 1
 
@@ -87,9 +91,11 @@ def test_bases_inside_scene_footprints_are_rejected(planar3):
     assert base_in_footprints(np.array([0.8, 0.0, 0.0]), turned) is None
     path, targets = _reachable_targets(planar3, np.array([0.3, 0.0, 0.0]))
     guesses = np.array([[0.3, 0, 0], [1.2, 0, 0]])
-    free = track(planar3, targets, TrackOptions(sqp=QUICK, q_start=path[0], merge_distance=0.0), guesses=guesses)
+    options = TrackOptions(sqp=QUICK, q_start=path[0], merge_distance=0.0, initialisations=HOLD)
+    free = track(planar3, targets, options, guesses=guesses)
     around_best = np.array([[free.base[0], 0.0, 0.01, 5.0, 0.0]])
-    options = TrackOptions(sqp=QUICK, q_start=path[0], footprints=around_best, merge_distance=0.0)
+    options = TrackOptions(sqp=QUICK, q_start=path[0], footprints=around_best, merge_distance=0.0,
+                           initialisations=HOLD)
     try:
         restricted = track(planar3, targets, options, guesses=guesses)
     except ValueError as error:
@@ -98,7 +104,8 @@ def test_bases_inside_scene_footprints_are_rejected(planar3):
         assert base_in_footprints(restricted.base, around_best) is None
         assert restricted.statistics["starts_rejected_in_footprints"] >= 1
     everywhere = np.array([[0.0, 0.0, 100.0, 100.0, 0.0]])
-    with pytest.raises(ValueError, match="every one of the 2 solutions puts the robot base inside a scene element"):
+    with pytest.raises(ValueError, match="every one of the 4 solutions puts the robot base inside a scene element"):
+        # 2 base guesses x the 2 default joint initialisations
         track(planar3, targets, TrackOptions(sqp=QUICK, q_start=path[0], footprints=everywhere), guesses=guesses)
 
 
@@ -111,3 +118,17 @@ def test_roll_symmetric_tool_tries_the_turned_targets():
     assert result.statistics["roll_variant"] == 1
     # errors are measured against the chosen variant (the other one is pi away)
     assert np.median(result.rotation_error) < 0.3
+
+
+def test_library_defaults_are_the_clis():
+    import argparse
+
+    from toolimit.cli import build_parser
+    from toolimit.trajopt import TrackOptions
+
+    args = build_parser().parse_args(["trajopt", "--robot", "panda", "--tool", "spade", "--poses", "p.npz",
+                                      "--out", "o"])
+    assert isinstance(args, argparse.Namespace) and args.init == "both"
+    options = TrackOptions()
+    assert options.initialisations == ("hold", "rollout") and options.starts == args.starts
+    assert options.weights.velocity == args.velocity_weight and options.weights.posture == args.posture_weight

@@ -15,7 +15,7 @@ from toolimit.align.sampler import (
     minimum_element_distance,
     sample_element_positions,
 )
-from toolimit.align.search import AlignmentResult, Candidate, align, prepare_demo
+from toolimit.align.search import AlignmentResult, Candidate, SearchInterrupted, align, prepare_demo
 
 __all__ = [
     "DEMO_PLANES",
@@ -23,6 +23,7 @@ __all__ = [
     "AlignmentResult",
     "AlignmentSample",
     "Candidate",
+    "SearchInterrupted",
     "align",
     "apply_alignment_sample",
     "draw_alignment_sample",

@@ -12,6 +12,7 @@ import contextlib
 import functools
 import multiprocessing
 import re
+import signal
 import time
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -19,7 +20,6 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from toolimit.align.checkpoint import checkpoint_key, load_checkpoint, save_checkpoint
 from toolimit.align.config import DEMO_PLANES, AlignmentConfig
@@ -30,7 +30,10 @@ from toolimit.align.sampler import (
     draw_alignment_sample,
     minimum_element_distance,
 )
+from toolimit.demos.cleaning import CleaningReport, clean_demo
 from toolimit.demos.tool_demo import ToolDemo
+from toolimit.interrupts import Interrupted, interruptible, starting_processes
+from toolimit.progress import tqdm
 from toolimit.scenes.base import InvalidSceneParameters, ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
@@ -88,6 +91,8 @@ class AlignmentResult:
         samples_to_first_candidate: index of the first candidate + 1, None if none.
         rejection_reasons: rejected samples per reason (its message with numbers replaced by '#').
         wall_time_s: seconds the search took, worker start-up included (summed over resumed runs).
+        cleaning: what :func:`~toolimit.demos.clean_demo` changed in the demo before the search,
+            None when the demo was aligned as given (``clean=False``).
     """
 
     tool: str
@@ -104,6 +109,7 @@ class AlignmentResult:
     samples_to_first_candidate: int | None = None
     rejection_reasons: dict[str, int] = field(default_factory=dict)
     wall_time_s: float = 0.0
+    cleaning: CleaningReport | None = None
 
     @property
     def best(self) -> Candidate | None:
@@ -212,6 +218,8 @@ _WORKER_EVALUATOR: SampleEvaluator | None = None
 
 def _init_worker(scene_factory: SceneFactory, *evaluator_args: object) -> None:
     global _WORKER_EVALUATOR
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the process group is the parent's to handle
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # ignored now: no need to keep it blocked
     _WORKER_EVALUATOR = SampleEvaluator(scene_factory(), *evaluator_args)  # type: ignore[arg-type]
 
 
@@ -248,13 +256,30 @@ def _outcomes_in_order(
     pending: list[Future[list[SampleOutcome]]] = []
     try:
         for start, stop in chunks:
-            pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
+            if len(pending) < workers:  # the submits that start the worker processes
+                with starting_processes():
+                    pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
+            else:
+                pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
             if len(pending) >= 2 * workers:
                 yield pending.pop(0).result()
         while pending:
             yield pending.pop(0).result()
     finally:
-        executor.shutdown(wait=True, cancel_futures=True)
+        _stop_workers(executor)
+
+
+def _stop_workers(executor: ProcessPoolExecutor) -> None:
+    """Cancel the queued chunks and end the worker processes now, without waiting for running chunks
+    (their results are not needed: the search has enough, or was interrupted). Python 3.14 has
+    ``executor.terminate_workers()``; before it, the processes are only reachable as ``_processes``."""
+    processes = list((getattr(executor, "_processes", None) or {}).values())
+    executor.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=1.0)
 
 
 def align(
@@ -267,21 +292,29 @@ def align(
     progress: bool = True,
     scene_factory: SceneFactory | None = None,
     checkpoint: str | Path | None = None,
+    clean: bool = True,
 ) -> AlignmentResult:
     """Search scene parameters, scale, z offset and rolls under which ``demo`` reaches the goal.
 
     Args:
-        demo: the demonstration (world frame, metres), any frame rate.
+        demo: the demonstration (world frame, metres), any frame rate. It is cleaned first
+            (:func:`~toolimit.demos.clean_demo`: reconstruction outliers replaced, jitter smoothed)
+            unless ``clean=False``, as ``toolimit align`` does unless ``--no-clean``.
         tool, world: the scene, built with :func:`toolimit.scenes.registry.make_scene`.
         config: search settings (default :class:`AlignmentConfig`).
         seed: sample i uses ``np.random.default_rng([seed, i])``.
         workers: processes evaluating samples; the result does not depend on it.
-        progress: show a tqdm bar.
+        progress: show a tqdm bar of the candidates found against K, with the samples examined.
         scene_factory: a picklable callable making the scene instead of the registry (tests,
             researchers' own scenes); every worker calls it once.
-        checkpoint: a JSON file where the search saves its progress (every few seconds) and from
-            which it resumes when the file was made with the same demo, scene, seed and settings;
-            it is removed when the search ends.
+        clean: clean the demo before the search (default True; the report is ``result.cleaning``).
+        checkpoint: a JSON file where the search saves its progress (every few seconds, and when
+            interrupted) and from which it resumes when the file was made with the same demo,
+            scene, seed and settings; it is removed when the search ends.
+
+    Raises :class:`SearchInterrupted` (a KeyboardInterrupt) on SIGINT or SIGTERM, after saving the
+    checkpoint (if any sample finished) and ending the worker processes; a second signal during
+    that cleanup is ignored.
 
     The demo is resampled to the scene's control rate and projected onto the world's plane
     (:data:`~toolimit.align.config.DEMO_PLANES`); keypoints and the minimum element distance d_th
@@ -292,36 +325,65 @@ def align(
     if not (isinstance(workers, int) and workers >= 1):
         raise ValueError(f"workers: expected a positive integer, got {workers!r}")
     started = time.perf_counter()
+    cleaning = None
+    if clean:
+        demo, cleaning = clean_demo(demo)
     scene_factory = scene_factory or functools.partial(make_scene, tool, world)
     scene = scene_factory()
     prepared, plane = prepare_demo(demo, tool, world, scene.control_dt)
     keypoints = velocity_keypoints(prepared, config.keypoint_fraction)
     min_distance = minimum_element_distance(prepared.head)
     evaluator = SampleEvaluator(scene, prepared, keypoints, config, plane, min_distance, seed)
-    result = AlignmentResult(tool, world, plane, seed, config, prepared, keypoints, min_distance)
+    result = AlignmentResult(tool, world, plane, seed, config, prepared, keypoints, min_distance, cleaning=cleaning)
     key = checkpoint_key(tool, world, seed, config, prepared)
     previous_time = 0.0
     if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:
         previous_time = _restore(result, state, evaluator)
-    bar = tqdm(total=config.samples, initial=result.samples_tried, desc=f"align {tool}/{world}", unit="sample",
-               disable=not progress)
+    # the search ends at the K-th candidate, usually long before the sample budget: count candidates
+    bar = tqdm(total=config.candidates, initial=len(result.candidates), desc=f"align {tool}/{world}",
+               unit="candidate", disable=not progress)
     last_save = time.perf_counter()
     chunks = _outcomes_in_order(evaluator, scene_factory, config, workers, first=result.samples_tried)
-    with bar, contextlib.closing(chunks):
-        for outcomes in chunks:
-            enough = _merge(result, outcomes)
-            bar.set_postfix(candidates=len(result.candidates), rejected=result.samples_rejected, refresh=False)
-            bar.update(result.samples_tried - bar.n)
-            if enough:
-                break
-            if checkpoint is not None and time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+    with interruptible():
+        try:
+            with bar, contextlib.closing(chunks):  # closing the generator ends the worker processes
+                for outcomes in chunks:
+                    enough = _merge(result, outcomes)
+                    bar.set_postfix(samples=f"{result.samples_tried}/{config.samples}",
+                                    rejected=result.samples_rejected, refresh=False)
+                    bar.update(len(result.candidates) - bar.n)
+                    if enough:
+                        break
+                    if checkpoint is not None and time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+                        result.wall_time_s = previous_time + time.perf_counter() - started
+                        save_checkpoint(checkpoint, key, _state(result))
+                        last_save = time.perf_counter()
+        except Interrupted as stop:
+            saved = None
+            if checkpoint is not None and result.samples_tried > 0:
                 result.wall_time_s = previous_time + time.perf_counter() - started
                 save_checkpoint(checkpoint, key, _state(result))
-                last_save = time.perf_counter()
+                saved = Path(checkpoint)
+            raise SearchInterrupted(stop.signum, result.samples_tried, len(result.candidates), saved) from None
     result.wall_time_s = previous_time + time.perf_counter() - started
     if checkpoint is not None:
         Path(checkpoint).unlink(missing_ok=True)
     return result
+
+
+class SearchInterrupted(Interrupted):
+    """The search stopped on SIGINT or SIGTERM, its worker processes ended.
+
+    Attributes: ``samples_tried`` (the index-ordered prefix examined), ``candidates`` (found in it),
+    ``checkpoint`` (the file holding that progress, None when nothing was saved: no checkpoint
+    asked for, or no sample finished).
+    """
+
+    def __init__(self, signum: int, samples_tried: int, candidates: int, checkpoint: Path | None) -> None:
+        super().__init__(signum)
+        self.samples_tried = samples_tried
+        self.candidates = candidates
+        self.checkpoint = checkpoint
 
 
 def _state(result: AlignmentResult) -> dict[str, Any]:

@@ -2,7 +2,9 @@
 
 Each module in ``COMMANDS`` exposes ``register(subparsers)``, which adds its sub-command and sets
 ``func`` to a function ``(args) -> int``. User errors raise :class:`CliError` (or a ValueError /
-OSError from the library): they print one line and exit with code 2, with no traceback.
+OSError from the library): they print one line and exit with code 2, with no traceback. SIGINT
+and SIGTERM stop a command with exit code 130 / 143 and one line, no traceback
+(:mod:`toolimit.interrupts`; a command may catch the interruption first to say what it saved).
 """
 
 from __future__ import annotations
@@ -10,6 +12,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import tempfile
+from pathlib import Path
+from typing import NoReturn
+
+from toolimit import interrupts
 
 COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.replay", "toolimit.cli.trajopt",
             "toolimit.cli.export", "toolimit.cli.learn", "toolimit.cli.evaluate", "toolimit.cli.run")
@@ -19,8 +26,31 @@ class CliError(Exception):
     """A user error: bad argument, missing or malformed file."""
 
 
+class _OneLineErrorParser(argparse.ArgumentParser):
+    """argparse, but a usage error (unknown choice, missing option) is one line, exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
+def check_writable_folder(folder: Path, option: str) -> None:
+    """Raise CliError unless files can be created in ``folder`` (created later if missing): checked
+    before any work, so that a long run never ends in an unwritable output."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise CliError(f"{option}: cannot write in {folder}: {existing} is a file, not a folder")
+    try:
+        with tempfile.NamedTemporaryFile(dir=existing, prefix=".toolimit-write-check."):
+            pass
+    except OSError as error:
+        raise CliError(f"{option}: cannot write in {folder}: creating a file in {existing} fails "
+                       f"({error.strerror})") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _OneLineErrorParser(
         prog="toolimit",
         description="A robot learns to use a tool from one video demonstration: "
         "demo (i) -> align (ii) -> trajopt (iii) -> export.",
@@ -33,12 +63,20 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if argv is None:  # the `toolimit` process itself (not a call from Python code): own its signals
+        interrupts.install()
     try:
         return int(args.func(args) or 0)
+    except interrupts.Interrupted as stop:
+        print(f"toolimit {args.command}: interrupted ({stop.signal_name})", file=sys.stderr)
+        return stop.exit_code
     except (CliError, ValueError, OSError, KeyError) as error:
         message = str(error) if not isinstance(error, KeyError) else f"missing key {error}"
         print(f"toolimit {args.command}: error: {message}", file=sys.stderr)
         return 2
+    finally:
+        if argv is None:
+            interrupts.ending()
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 
 Writes ``DIR/alignment.json`` (the search's record) and ``DIR/aligned_demo.npz`` (the best
 candidate's aligned motion); optionally a rerun recording (``--rerun``) and, in the 3d world, the
-best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (Ctrl-C: exit code 130) leaves ``DIR/alignment_checkpoint.json``; the
-same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
+best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (SIGINT,
+e.g. Ctrl-C: exit code 130; SIGTERM: 143) saves ``DIR/alignment_checkpoint.json`` if any sample
+finished; the same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
 is still written, with an empty candidate list, and no aligned demo), 2 bad input.
 """
 
@@ -14,7 +15,7 @@ import os
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 DEFAULT_SAMPLES = 20_000
 #: The search's progress in the output folder while it runs (removed when it ends).
@@ -81,27 +82,28 @@ def _check_arguments(args: argparse.Namespace) -> int:
         raise CliError(f"--demo: no such file: {args.demo}")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
-    if args.rerun is not None and args.rerun.suffix != ".rrd":
-        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    check_writable_folder(args.out, "--out")
+    if args.rerun is not None:
+        if args.rerun.suffix != ".rrd":
+            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+        check_writable_folder(args.rerun.parent, "--rerun")
     if args.html is not None:
         if args.html.suffix != ".html":
             raise CliError(f"--html: expected a .html file name, got {args.html}")
         if args.world != "3d":
             raise CliError(f"--html: the meshcat replay draws the 3d worlds, not the {args.world} world")
+        check_writable_folder(args.html.parent, "--html")
     return workers
 
 
 def run(args: argparse.Namespace) -> int:
     from toolimit.align.config import AlignmentConfig
-    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, write_alignment
-    from toolimit.align.search import align
-    from toolimit.demos import clean_demo, load_demo
+    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, CANDIDATES_NPZ, write_alignment
+    from toolimit.align.search import SearchInterrupted, align
+    from toolimit.demos import load_demo
 
     workers = _check_arguments(args)
     demo = load_demo(args.demo, tool=args.tool)  # also names the tool of files that do not store it
-    if not args.no_clean:
-        demo, report = clean_demo(demo)
-        print(f"cleaned demo: {len(report.replaced_frames)} of {demo.n_frames} frames replaced")
     settings = {} if args.z_offset_std is None else {"z_offset_std": args.z_offset_std}
     config = AlignmentConfig(samples=args.samples, candidates=args.candidates, **settings)
     checkpoint = args.out / CHECKPOINT_JSON
@@ -110,12 +112,19 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = align(
             demo, args.tool, args.world, config, seed=args.seed, workers=workers, progress=not args.quiet,
-            checkpoint=checkpoint,
+            checkpoint=checkpoint, clean=not args.no_clean,
         )
-    except KeyboardInterrupt:
-        print(f"interrupted: run the same command again to resume from {checkpoint}", file=sys.stderr)
-        return 130
+    except SearchInterrupted as stop:
+        found = f"{stop.samples_tried} samples examined, {stop.candidates} candidate(s)"
+        if stop.checkpoint is not None:
+            print(f"interrupted ({stop.signal_name}) after {found}: progress saved to {stop.checkpoint}; "
+                  "run the same command again to resume", file=sys.stderr)
+        else:
+            print(f"interrupted ({stop.signal_name}) before any sample finished: nothing was saved", file=sys.stderr)
+        return stop.exit_code
     write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
+    if result.cleaning is not None:
+        print(f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced")
     rejected = result.samples_rejected / max(result.samples_tried, 1)
     print(
         f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples "
@@ -141,7 +150,11 @@ def run(args: argparse.Namespace) -> int:
         return 1
     print(
         f"best: sample {best.index}, mean goal reward {best.reward:.3f} "
-        f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m); "
-        f"wrote {args.out / ALIGNMENT_JSON} and {args.out / ALIGNED_DEMO_NPZ}"
+        f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m)"
+    )
+    robot = "panda" if args.world == "3d" else "planar3"
+    print(
+        f"wrote {args.out / ALIGNMENT_JSON}, {args.out / CANDIDATES_NPZ} and {args.out / ALIGNED_DEMO_NPZ}; next: "
+        f"toolimit trajopt --robot {robot} --tool {args.tool} --alignment {args.out} --out {args.out}_{robot}"
     )
     return 0

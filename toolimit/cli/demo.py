@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 if TYPE_CHECKING:
     from toolimit.demos import ToolDemo
@@ -23,7 +23,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     synth.add_argument("--out", required=True, type=Path, help="output .npz file")
     synth.set_defaults(func=run_synth)
 
-    show = actions.add_parser("show", help="print a demonstration's summary and keypoints")
+    show = actions.add_parser("show", help="print a demonstration's summary and keypoints, as loaded and cleaned")
     show.add_argument("path", type=Path, help="demonstration file")
     show.add_argument("--tool", default=None, help="tool name, for files that do not store it")
     show.set_defaults(func=run_show)
@@ -41,6 +41,7 @@ def run_synth(args: argparse.Namespace) -> int:
         raise CliError(f"--fps: must be positive, got {args.fps}")
     if args.out.suffix != ".npz":
         raise CliError(f"--out: expected a .npz file name, got {args.out}")
+    check_writable_folder(args.out.parent, "--out")
     demo = synthesize_demo(args.tool, args.seed, fps=args.fps)
     save_demo(demo, args.out)
     print(f"wrote {args.out}: {summary(demo)}")
@@ -49,14 +50,27 @@ def run_synth(args: argparse.Namespace) -> int:
 
 def run_show(args: argparse.Namespace) -> int:
     from toolimit.align.keypoints import velocity_keypoints
-    from toolimit.demos import load_demo
+    from toolimit.demos import clean_demo, load_demo
+
+    from toolimit.demos.tool_demo import DemoError
 
     demo = load_demo(args.path, tool=args.tool)
-    print(f"{args.path}: {summary(demo)}")
-    print(f"keypoints (frames): {velocity_keypoints(demo).tolist()}")
+    print(f"{args.path}: {demo.tool}, {demo.n_frames} frames at {demo.fps:g} fps ({demo.duration:.2f} s)")
     if demo.source:
         print(f"source: {demo.source}")
+    print(f"as loaded (raw): {_motion(demo)}, keypoints (frames) {velocity_keypoints(demo).tolist()}")
+    try:
+        cleaned, report = clean_demo(demo)
+    except DemoError as error:  # `toolimit align` would refuse it the same way; --no-clean aligns it raw
+        print(f"cleaned: not possible ({error})")
+        return 0
+    print(f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced): {_motion(cleaned)}, "
+          f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}")
     return 0
+
+
+def _motion(demo: ToolDemo) -> str:
+    return f"tool length {demo.length:.3f} m, peak speed {demo.speed().max():.2f} m/s"
 
 
 def summary(demo: ToolDemo) -> str:

@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
 
@@ -24,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "trajopt", help="optimise a robot trajectory tracking the aligned tool motion (stage iii)",
         description=__doc__.splitlines()[0],
     )
-    parser.add_argument("--robot", required=True, choices=ROBOTS, help="robot model")
+    parser.add_argument("--robot", required=True, help=f"robot model ({', '.join(ROBOTS)})")
     parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--alignment", type=Path, help="alignment output folder (reads aligned_demo.npz)")
@@ -74,11 +74,14 @@ def _time_scale(text: str) -> float | None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from toolimit.robots import make_robot
+    from toolimit.deploy import SUPPORTED_ROBOTS
+    from toolimit.robots import ROBOTS, make_robot
     from toolimit.tools import TOOLS
     from toolimit.trajopt import (TrackingWeights, TrackOptions, choose_time_scale, from_original_spade_tip,
                                   load_pose_targets, track)
 
+    if args.robot not in ROBOTS:
+        raise CliError(f"--robot: unknown robot {args.robot!r}; choose one of {', '.join(ROBOTS)}")
     if args.tool not in TOOLS:
         raise CliError(f"--tool: unknown tool {args.tool!r}; choose one of {', '.join(sorted(TOOLS))}")
     if args.starts <= 0:
@@ -91,8 +94,11 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
-    if args.rerun is not None and args.rerun.suffix != ".rrd":
-        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    check_writable_folder(args.out, "--out")
+    if args.rerun is not None:
+        if args.rerun.suffix != ".rrd":
+            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+        check_writable_folder(args.rerun.parent, "--rerun")
     if args.select_by_robot and args.alignment is None:
         raise CliError("--select-by-robot: needs --alignment DIR (the candidates of an alignment)")
     if args.alignment is not None:
@@ -128,13 +134,16 @@ def run(args: argparse.Namespace) -> int:
         from toolimit.viz.rerun_trajopt import save_trajectory_recording
 
         save_trajectory_recording(result, robot, args.rerun, targets.positions)
-    summary = result.summary()
-    print(
-        f"{args.robot}: time scale {result.time_scale:g}, J = {result.statistics['cost']:.4f}, "
-        f"position error median {summary['position_error_m']['median'] * 100:.1f} cm, "
-        f"limit violations {result.limit_violations}, velocity violations {result.velocity_violations}; "
-        f"wrote {args.out}"
-    )
+    print(f"{args.robot}: {result.describe()}")
+    if result.upside_down:
+        print(f"note: the {args.tool} is tracked upside down (median rotation error "
+              f"{np.degrees(np.median(result.rotation_error)):.0f} deg): its position follows the targets, its "
+              "orientation does not (trajectory.json has the error at every step)", file=sys.stderr)
+    written = f"wrote {args.out / 'trajectory.npz'} and {args.out / 'trajectory.json'}"
+    if args.robot in SUPPORTED_ROBOTS:
+        print(f"{written}; next: toolimit export --trajectory {args.out} --robot {args.robot} --out {args.out}_export")
+    else:
+        print(f"{written} (export to a real robot needs published limits: {', '.join(SUPPORTED_ROBOTS)})")
     return 0
 
 
@@ -151,8 +160,11 @@ def _select_by_robot(args: argparse.Namespace, robot, options, solve):
     selection = select_by_robot_execution(robot, candidates, tool, world, options, solve, seed=args.seed,
                                           progress=not args.quiet)
     save_json(args.out / "selection.json", selection.record(candidates))
-    rewards = ", ".join("refused" if r != r else f"{r:.1f}" for r in selection.robot_rewards)
-    print(f"robot replay reward per candidate: {rewards}")
+    for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):
+        if trajectory is None:
+            print(f"candidate {k}: refused ({selection.refusals[k]})")
+        else:
+            print(f"candidate {k}: robot replay reward {reward:.1f}; {trajectory.describe()}")
     if selection.best is None:
         print(f"no candidate's robot replay earned a goal reward; wrote {args.out / 'selection.json'}", file=sys.stderr)
         return None, None

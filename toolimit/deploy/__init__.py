@@ -1,26 +1,35 @@
-"""Real-robot export: a smooth, limit-checked joint trajectory for open-loop execution (CSV + JSON)."""
+"""Real-robot export: a joint path retimed within the robot's published limits, sampled for streaming (CSV + JSON).
+
+``retime(q, dt, limits)`` is the library entry point for any joint path (an optimised trajectory, a
+policy's rollout): it returns a :class:`RetimedPath` whose ``sample(rate)`` gives the commands.
+"""
 
 from toolimit.deploy.export import (
+    ExportPlan,
     JointTrajectory,
-    LimitViolation,
-    check_trajectory,
     export_trajectory,
     load_trajectory,
-    minimal_time_scale,
+    plan_export,
 )
 from toolimit.deploy.limits import SUPPORTED_ROBOTS, JointLimits, published_limits
-from toolimit.deploy.resample import fit_joint_spline, resample
+from toolimit.deploy.retime import (
+    PathOutsideLimits,
+    RetimedPath,
+    SampledTrajectory,
+    retime,
+)
 
 __all__ = [
     "SUPPORTED_ROBOTS",
+    "ExportPlan",
     "JointLimits",
     "JointTrajectory",
-    "LimitViolation",
-    "check_trajectory",
+    "PathOutsideLimits",
+    "RetimedPath",
+    "SampledTrajectory",
     "export_trajectory",
-    "fit_joint_spline",
     "load_trajectory",
-    "minimal_time_scale",
+    "plan_export",
     "published_limits",
-    "resample",
+    "retime",
 ]

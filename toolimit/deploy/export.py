@@ -4,15 +4,17 @@ Input: ``DIR/trajectory.npz`` written by trajectory optimisation: ``q`` (T+1, N)
 rad/s with ``q[t] = q[t-1] + dt v[t-1]``, ``base`` (3,) = (x m, y m, yaw rad) world placement of
 the robot base, ``joint_names`` (N,), ``dt`` (s).
 
-Output (only if every limit check passes; each file written atomically):
+The joint path q is retimed within the robot's published velocity, acceleration and jerk limits
+(:mod:`toolimit.deploy.retime`: slowed down only where a limit requires it, never carried past a
+position limit) and sampled at ``rate`` Hz. Only a path sample outside a position limit is refused.
 
-* ``joint_trajectory_control_rate.csv``: the samples q_t at t * dt * time_scale;
-* ``joint_trajectory_resampled.csv``: the smooth interpolant (:mod:`toolimit.deploy.resample`)
-  sampled at ``rate`` Hz, the commands to stream to the robot;
-* ``joint_trajectory.json``: joint names, rates, units, the limits used, every check's worst sample,
-  the interpolant, the time scale and the base placement.
+Output (each file written atomically, both complete before either is renamed into place):
 
-CSV: header ``time_s`` then the joint names; one row per sample; positions in rad.
+* ``joint_trajectory.csv``: the commands to stream to the robot, every 1/rate s from rest to rest;
+  header ``time_s`` then the joint names, positions in rad;
+* ``joint_trajectory.json``: joint names, rate, units, exported and optimised durations, the largest
+  gap between the exported path and the optimised samples, the limits used, every quantity's
+  worst sample, the retiming method and the base placement.
 """
 
 from __future__ import annotations
@@ -27,15 +29,25 @@ from pathlib import Path
 import numpy as np
 
 from toolimit.artifacts import atomic_path
-from toolimit.deploy.limits import UNITS, JointLimits, QuantityCheck, check_samples, published_limits
-from toolimit.deploy.resample import INTERPOLANT, SampledTrajectory, fit_joint_spline, resample
+from toolimit.deploy.limits import (
+    UNITS,
+    JointLimits,
+    QuantityCheck,
+    check_samples,
+    published_limits,
+)
+from toolimit.deploy.retime import (
+    DEFAULT_SUBDIVISIONS,
+    METHOD,
+    RetimedPath,
+    SampledTrajectory,
+    retime,
+)
 
-CONTROL_CSV = "joint_trajectory_control_rate.csv"
-RESAMPLED_CSV = "joint_trajectory_resampled.csv"
+TRAJECTORY_CSV = "joint_trajectory.csv"
 SUMMARY_JSON = "joint_trajectory.json"
 DEFAULT_RATE_HZ = 1000.0
 _VELOCITY_CONSISTENCY_TOL = 1e-6  # rad/s: |v - diff(q)/dt| allowed in trajectory.npz
-_TIME_SCALE_STEP = 1e-3  # resolution of the suggested minimal time scale
 
 
 @dataclass(frozen=True)
@@ -84,125 +96,82 @@ def load_trajectory(directory: str | Path) -> JointTrajectory:
     return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt)
 
 
-class LimitViolation(ValueError):
-    """The trajectory would exceed a published limit; nothing was written.
-
-    Attributes: ``checks`` (every quantity's worst sample), ``minimal_time_scale`` (a time scale
-    at which the checks pass, or None when a position limit is exceeded, which slowing down cannot fix).
-    """
-
-    def __init__(self, checks: list[QuantityCheck], minimal_time_scale: float | None,
-                 samples_within_position_limits: bool = False) -> None:
-        self.checks = checks
-        self.minimal_time_scale = minimal_time_scale
-        failed = [check for check in checks if not check.passed]
-        message = "; ".join(check.describe() for check in failed)
-        if minimal_time_scale is not None:
-            message += (f"; a time scale of at least {minimal_time_scale:.3f} (--time-scale "
-                        f"{minimal_time_scale:.3f}, slower) would pass")
-        elif any(check.quantity == "position" for check in failed):
-            message += "; slowing down cannot fix a position limit"
-            if samples_within_position_limits:
-                message += (" (every control-rate sample is within its limits: the smooth interpolant overshoots "
-                            "between samples that touch a limit)")
-        super().__init__(f"refusing to export: {message}")
-
-
 @dataclass(frozen=True)
 class ExportPlan:
-    """The checked trajectory: the resampled commands and each quantity's worst sample."""
+    """The retimed trajectory: the samples to stream and each quantity's worst sample against its limit."""
 
     trajectory: JointTrajectory
     limits: JointLimits
-    time_scale: float
     rate: float
+    path: RetimedPath
     samples: SampledTrajectory
     checks: list[QuantityCheck]
 
     @property
-    def passed(self) -> bool:
-        return all(check.passed for check in self.checks)
+    def optimised_duration(self) -> float:
+        """Duration of the optimised trajectory, s (T dt)."""
+        return self.trajectory.dt * (len(self.trajectory.q) - 1)
 
 
-def check_trajectory(trajectory: JointTrajectory, limits: JointLimits, rate: float = DEFAULT_RATE_HZ,
-                     time_scale: float = 1.0) -> ExportPlan:
-    """Interpolate with the trajectory's time stretched by ``time_scale`` (> 1 slows down; the step
-    becomes dt * time_scale), resample at ``rate`` Hz, check."""
+def plan_export(trajectory: JointTrajectory, limits: JointLimits, rate: float = DEFAULT_RATE_HZ,
+                subdivisions: int = DEFAULT_SUBDIVISIONS) -> ExportPlan:
+    """Retime ``trajectory`` within ``limits`` (:func:`toolimit.deploy.retime.retime`) and sample it at ``rate`` Hz.
+
+    Raises :class:`PathOutsideLimits` for a sample outside the position limits, ValueError for
+    mismatched joints or a bad rate.
+    """
     if tuple(trajectory.joint_names) != limits.joint_names:
         raise ValueError(f"trajectory joints {list(trajectory.joint_names)} do not match "
                          f"{limits.robot}'s joints {list(limits.joint_names)}")
-    if not (math.isfinite(time_scale) and time_scale > 0):
-        raise ValueError(f"time scale must be a positive number, got {time_scale}")
-    spline = fit_joint_spline(trajectory.q, trajectory.dt * time_scale)
-    samples = resample(spline, rate)
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate must be a positive number of Hz, got {rate}")
+    path = retime(trajectory.q, trajectory.dt, limits, subdivisions)
+    samples = path.sample(rate)
     checks = check_samples(limits, samples.times, samples.as_dict())
-    return ExportPlan(trajectory, limits, time_scale, rate, samples, checks)
-
-
-def minimal_time_scale(trajectory: JointTrajectory, limits: JointLimits, rate: float = DEFAULT_RATE_HZ) -> float | None:
-    """The smallest time scale (to 1e-3) at which every check passes; None if a position limit fails.
-
-    Velocity scales as 1/s, acceleration 1/s^2, jerk 1/s^3, which gives the estimate; it is then
-    verified on the resampled grid and raised step by step if the grid sees a slightly larger peak.
-    """
-    plan = check_trajectory(trajectory, limits, rate, 1.0)
-    ratio = {check.quantity: check.ratio for check in plan.checks}
-    if ratio["position"] > 0:
-        return None
-    estimate = max(1.0, ratio["velocity"], ratio["acceleration"] ** 0.5, ratio["jerk"] ** (1.0 / 3.0))
-    scale = math.ceil(estimate / _TIME_SCALE_STEP) * _TIME_SCALE_STEP
-    for _ in range(100):
-        if check_trajectory(trajectory, limits, rate, scale).passed:
-            return scale
-        scale += _TIME_SCALE_STEP
-    return None
+    failed = [check.describe() for check in checks if not check.passed]
+    if failed:  # the retiming guarantees the limits: this is a bug, not bad input
+        raise RuntimeError(f"retimed trajectory breaks a limit: {'; '.join(failed)}")
+    return ExportPlan(trajectory, limits, rate, path, samples, checks)
 
 
 def _csv(times: np.ndarray, positions: np.ndarray, joint_names: tuple[str, ...]) -> str:
     buffer = io.StringIO()
-    np.savetxt(buffer, np.column_stack([times, positions]), delimiter=",", fmt="%.9f",
+    np.savetxt(buffer, np.column_stack([times, positions]), delimiter=",", fmt="%.12f",
                header=",".join(("time_s",) + tuple(joint_names)), comments="")
     return buffer.getvalue()
 
 
 def export_trajectory(trajectory: JointTrajectory, robot: str, out_dir: str | Path, rate: float = DEFAULT_RATE_HZ,
-                      time_scale: float = 1.0, source: str | None = None) -> ExportPlan:
-    """Check ``trajectory`` against ``robot``'s published limits and write the three files to ``out_dir``.
+                      subdivisions: int = DEFAULT_SUBDIVISIONS, source: str | None = None) -> ExportPlan:
+    """Retime ``trajectory`` within ``robot``'s published limits and write the CSV and JSON to ``out_dir``.
 
-    Raises :class:`LimitViolation` (nothing written) if a limit is exceeded, ValueError for an
-    unsupported robot or mismatched joints.
+    Raises :class:`PathOutsideLimits` (nothing written) if a path sample is outside a position
+    limit, ValueError for an unsupported robot or mismatched joints.
     """
-    limits = published_limits(robot)
-    plan = check_trajectory(trajectory, limits, rate, time_scale)
-    if not plan.passed:
-        samples_inside = bool(np.all((trajectory.q >= limits.position_lower) & (trajectory.q <= limits.position_upper)))
-        raise LimitViolation(plan.checks, minimal_time_scale(trajectory, limits, rate), samples_inside)
-    control_dt = trajectory.dt * time_scale
-    control_times = control_dt * np.arange(len(trajectory.q))
-    documents = {
-        CONTROL_CSV: _csv(control_times, trajectory.q, trajectory.joint_names),
-        RESAMPLED_CSV: _csv(plan.samples.times, plan.samples.position, trajectory.joint_names),
-    }
+    plan = plan_export(trajectory, published_limits(robot), rate, subdivisions)
     summary = {
         "robot": robot,
         "joint_names": list(trajectory.joint_names),
-        "control_rate_hz": 1.0 / control_dt,
-        "resampled_rate_hz": rate,
-        "time_scale": time_scale,
-        "duration_s": float(control_times[-1]),
-        "n_control_samples": len(control_times),
-        "n_resampled_samples": len(plan.samples.times),
+        "rate_hz": rate,
+        "duration_s": plan.path.duration,
+        "optimised_duration_s": plan.optimised_duration,
+        "n_samples": len(plan.samples.times),
+        "path_deviation_rad": plan.path.path_deviation,
+        "subdivisions": subdivisions,
         "units": {"time": "s", **UNITS},
-        "interpolation": INTERPOLANT,
-        "limits": limits.as_dict(),
+        "retiming": METHOD,
+        "limits": plan.limits.as_dict(),
         "checks": {check.quantity: check.as_dict() for check in plan.checks},
         "base": {"x_m": float(trajectory.base[0]), "y_m": float(trajectory.base[1]),
                  "yaw_rad": float(trajectory.base[2]),
                  "frame": "world; place the robot base here before execution"},
-        "files": {"control_rate_csv": CONTROL_CSV, "resampled_csv": RESAMPLED_CSV},
+        "files": {"csv": TRAJECTORY_CSV},
         "source": source,
     }
-    documents[SUMMARY_JSON] = json.dumps(summary, indent=2) + "\n"
+    documents = {
+        TRAJECTORY_CSV: _csv(plan.samples.times, plan.samples.position, trajectory.joint_names),
+        SUMMARY_JSON: json.dumps(summary, indent=2) + "\n",
+    }
     out_dir = Path(out_dir)
     with contextlib.ExitStack() as stack:  # every file is complete before the first is renamed into place
         for name, text in documents.items():

@@ -11,12 +11,13 @@ from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeigh
 from toolimit.trajopt.reachability import reachable_steps
 from toolimit.trajopt.result import TrajectoryResult
 from toolimit.trajopt.sqp import SqpOptions, SqpOutcome, solve_sqp
-from toolimit.trajopt.targets import from_original_spade_tip, load_pose_targets
+from toolimit.trajopt.targets import from_original_spade_tip, load_pose_targets, targets_from_alignment
 from toolimit.trajopt.time_scale import TIME_SCALE_GRID, choose_time_scale
 from toolimit.trajopt.track import TrackOptions, base_guesses, track
 
 __all__ = [
     "PoseTargets", "SqpOptions", "SqpOutcome", "TIME_SCALE_GRID", "TrackOptions", "TrackingProblem",
     "TrackingWeights", "TrajectoryResult", "base_guesses", "choose_time_scale", "execute_in_scene",
-    "execute_tool_poses", "from_original_spade_tip", "load_pose_targets", "reachable_steps", "solve_sqp", "track",
+    "execute_tool_poses", "from_original_spade_tip", "load_pose_targets", "reachable_steps", "solve_sqp",
+    "targets_from_alignment", "track",
 ]

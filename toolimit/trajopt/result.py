@@ -22,6 +22,9 @@ TRAJECTORY_NPZ = "trajectory.npz"
 TRAJECTORY_JSON = "trajectory.json"
 
 
+#: Median rotation error beyond which a result counts as tracking the tool upside down, rad.
+UPSIDE_DOWN_RAD = np.pi / 2
+
 @dataclass(frozen=True)
 class TrajectoryResult:
     """An optimised robot trajectory and how well it tracks its targets.
@@ -71,6 +74,22 @@ class TrajectoryResult:
         """Number of (step, joint) velocities above their limits."""
         return int(np.sum(self.velocity_ratio > 1.0 + 1e-9))
 
+    @property
+    def upside_down(self) -> bool:
+        """True when the tool is turned more than 90 degrees from its target orientation at the
+        median step: the position may be tracked, but with the tool (a spade's blade) upside down."""
+        return bool(np.median(self.rotation_error) > UPSIDE_DOWN_RAD)
+
+    def describe(self) -> str:
+        """One line: time scale, cost, median position and rotation errors, violations."""
+        text = (f"time scale {self.time_scale:g}, J = {self.statistics.get('cost', float('nan')):.4f}, "
+                f"position error median {np.median(self.position_error) * 100:.1f} cm, rotation error median "
+                f"{np.degrees(np.median(self.rotation_error)):.0f} deg, limit violations {self.limit_violations}, "
+                f"velocity violations {self.velocity_violations}")
+        if self.upside_down:
+            text += "; UPSIDE DOWN: the tool is turned more than 90 deg from its target orientation at most steps"
+        return text
+
     def summary(self) -> dict[str, Any]:
         """Scalar figures: errors (m, rad), margins, velocity ratio, statistics."""
         return {
@@ -82,6 +101,7 @@ class TrajectoryResult:
             "base": {"x": float(self.base[0]), "y": float(self.base[1]), "yaw": float(self.base[2])},
             "position_error_m": _stats(self.position_error),
             "rotation_error_rad": _stats(self.rotation_error),
+            "upside_down": self.upside_down,
             "steps_position_error_over_1cm": int(np.sum(self.position_error > 0.01)),
             "min_limit_margin_rad": float(self.limit_margin.min()),
             "limit_violations": self.limit_violations,

@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
-from tqdm.auto import tqdm
 
+from toolimit.progress import tqdm
 from toolimit.robots.model import RobotModel
 from toolimit.scenes.base import SceneParams
 from toolimit.scenes.registry import make_scene
@@ -70,6 +70,9 @@ class RobotSelection:
                     "robot_reward": None if np.isnan(reward) else float(reward),
                     "cost": None if trajectory is None else trajectory.statistics["cost"],
                     "time_scale": None if trajectory is None else trajectory.time_scale,
+                    "median_position_error_m": None if trajectory is None else float(np.median(trajectory.position_error)),
+                    "median_rotation_error_rad": None if trajectory is None else float(np.median(trajectory.rotation_error)),
+                    "upside_down": None if trajectory is None else trajectory.upside_down,
                     "refused": refusal,
                 }
                 for candidate, trajectory, reward, refusal in zip(

@@ -10,12 +10,25 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE
 from toolimit.trajopt.problem import PoseTargets
 
+if TYPE_CHECKING:
+    from toolimit.align.search import AlignmentResult, Candidate
+
+
+def targets_from_alignment(result: AlignmentResult, candidate: Candidate | None = None) -> PoseTargets:
+    """The tool poses of an alignment candidate (default: the best), at the prepared demo's rate:
+    what ``toolimit trajopt --alignment DIR`` reads from ``DIR/aligned_demo.npz``."""
+    candidate = candidate if candidate is not None else result.best
+    if candidate is None:
+        raise ValueError("the alignment has no candidate: no sample earned a goal reward")
+    _, _, poses = result.aligned_motion(candidate)
+    return PoseTargets(poses.position, poses.rotation, result.demo.fps)
 
 
 def load_pose_targets(path: str | os.PathLike[str]) -> PoseTargets:

@@ -29,14 +29,13 @@ from typing import Callable
 
 import numpy as np
 import pinocchio as pin
-from tqdm.auto import tqdm
 
+from toolimit.progress import tqdm
 from toolimit.robots import RobotModel
 from toolimit.trajopt.initial_guess import ik_rollout
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
 from toolimit.trajopt.result import TrajectoryResult
 from toolimit.trajopt.sqp import SqpOptions, SqpOutcome, solve_sqp
-
 
 #: Joint-trajectory initialisations of a run (see the module docstring).
 INITIALISATIONS = ("hold", "rollout")
@@ -72,7 +71,7 @@ class TrackOptions:
     q_start: np.ndarray | None = None
     footprints: np.ndarray | None = field(default=None)
     merge_distance: float = 0.02
-    initialisations: tuple[str, ...] = ("hold",)
+    initialisations: tuple[str, ...] = INITIALISATIONS
     progress: bool = False
 
     def __post_init__(self) -> None:
