@@ -53,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineErrorParser(
         prog="toolimit",
         description="A robot learns to use a tool from one video demonstration: "
-        "demo (i) -> align (ii) -> trajopt (iii) -> export.",
+        "demo (i) -> align (ii) -> trajopt (iii) -> learn (iv) -> export; `run` does them all.",
     )
     subparsers = parser.add_subparsers(dest="command", required=True)
     for module_name in COMMANDS:

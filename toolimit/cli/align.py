@@ -98,7 +98,12 @@ def _check_arguments(args: argparse.Namespace) -> int:
 
 def run(args: argparse.Namespace) -> int:
     from toolimit.align.config import AlignmentConfig
-    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, CANDIDATES_NPZ, write_alignment
+    from toolimit.align.outputs import (
+        ALIGNED_DEMO_NPZ,
+        ALIGNMENT_JSON,
+        CANDIDATES_NPZ,
+        write_alignment,
+    )
     from toolimit.align.search import SearchInterrupted, align
     from toolimit.demos import load_demo
 

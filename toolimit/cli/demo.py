@@ -51,7 +51,6 @@ def run_synth(args: argparse.Namespace) -> int:
 def run_show(args: argparse.Namespace) -> int:
     from toolimit.align.keypoints import velocity_keypoints
     from toolimit.demos import clean_demo, load_demo
-
     from toolimit.demos.tool_demo import DemoError
 
     demo = load_demo(args.path, tool=args.tool)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 EVALUATION_JSON = "evaluation.json"
 
@@ -46,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.policy.is_dir():
         raise CliError(f"--policy: no such folder: {args.policy}")
     out = args.out or args.policy / EVALUATION_JSON
+    check_writable_folder(out.parent, "--out")
     record = evaluation_record(args.policy, args.episodes, args.seed)
     save_json(out, record)
     print(f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "

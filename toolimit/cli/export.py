@@ -15,7 +15,12 @@ import argparse
 from pathlib import Path
 
 from toolimit.cli import check_writable_folder
-from toolimit.deploy import SUPPORTED_ROBOTS, export_trajectory, load_trajectory, published_limits
+from toolimit.deploy import (
+    SUPPORTED_ROBOTS,
+    export_trajectory,
+    load_trajectory,
+    published_limits,
+)
 from toolimit.deploy.export import DEFAULT_RATE_HZ, SUMMARY_JSON, TRAJECTORY_CSV
 from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
 

@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_writable_folder
 
 
 def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int) -> None:
@@ -89,6 +89,7 @@ def load_task(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from toolimit.learn.ppo import CHECKPOINT_STATE
     from toolimit.learn.training import CURVE_JSONL, learn_policy
 
     config = learning_config(args)
@@ -96,15 +97,19 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--trajectory: needs --alignment DIR")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
-    if args.rerun is not None and args.rerun.suffix != ".rrd":
-        raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+    check_writable_folder(args.out, "--out")
+    if args.rerun is not None:
+        if args.rerun.suffix != ".rrd":
+            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
+        check_writable_folder(args.rerun.parent, "--rerun")
     task = load_task(args)
     try:
         outcome = learn_policy(task, args.out, config, progress=not args.quiet)
-    except KeyboardInterrupt:
-        print(f"interrupted: run the same command again to resume from the last checkpoint in {args.out}",
-              file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as stop:  # interrupts.Interrupted (SIGINT, SIGTERM) or a plain Ctrl-C
+        saved = (args.out / CHECKPOINT_STATE).is_file()
+        print("interrupted: " + (f"run the same command again to resume from the checkpoint in {args.out}" if saved
+              else "no checkpoint was written yet; the same command starts again"), file=sys.stderr)
+        return int(getattr(stop, "exit_code", 130))
     if args.rerun is not None:
         from toolimit.viz.rerun_learning import save_learning_recording
 

@@ -77,8 +77,14 @@ def run(args: argparse.Namespace) -> int:
     from toolimit.deploy import SUPPORTED_ROBOTS
     from toolimit.robots import ROBOTS, make_robot
     from toolimit.tools import TOOLS
-    from toolimit.trajopt import (TrackingWeights, TrackOptions, choose_time_scale, from_original_spade_tip,
-                                  load_pose_targets, track)
+    from toolimit.trajopt import (
+        TrackingWeights,
+        TrackOptions,
+        choose_time_scale,
+        from_original_spade_tip,
+        load_pose_targets,
+        track,
+    )
 
     if args.robot not in ROBOTS:
         raise CliError(f"--robot: unknown robot {args.robot!r}; choose one of {', '.join(ROBOTS)}")

@@ -9,7 +9,12 @@ scene parameters, the robot's base and reference joint trajectory, and the episo
 from toolimit.learn.env import ToolUseEnv, env_id, register_environments
 from toolimit.learn.shipped import shipped_task, shipped_tasks
 from toolimit.learn.simulator import TaskSimulator
-from toolimit.learn.task import LearningTask, TaskFileError, task_from_pipeline, task_from_trajectory
+from toolimit.learn.task import (
+    LearningTask,
+    TaskFileError,
+    task_from_pipeline,
+    task_from_trajectory,
+)
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
 register_environments()

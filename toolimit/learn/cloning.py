@@ -22,10 +22,10 @@ from typing import Any
 import numpy as np
 import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
-from tqdm.auto import tqdm
 
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
+from toolimit.progress import tqdm
 
 #: The authors' fixed standard deviation of the joint velocities, rad/s.
 AUTHORS_ACTION_STD = 0.2

@@ -15,8 +15,8 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.artifacts import save_npz
 from toolimit.learn.task import LearningTask
-from toolimit.trajopt.result import TRAJECTORY_NPZ
 from toolimit.learn.vec_env import BatchedTaskVecEnv
+from toolimit.trajopt.result import TRAJECTORY_NPZ
 
 
 @dataclass(frozen=True)

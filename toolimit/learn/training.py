@@ -20,14 +20,21 @@ import numpy as np
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
-from tqdm.auto import tqdm
 
 from toolimit.artifacts import save_json
 from toolimit.learn.cloning import clone, collect_demonstrations
-from toolimit.learn.ppo import (CHECKPOINT_STATE, POLICY_ZIP, PRESETS, PpoSettings, make_ppo, resume_or_start,
-                                train)
+from toolimit.learn.ppo import (
+    CHECKPOINT_STATE,
+    POLICY_ZIP,
+    PRESETS,
+    PpoSettings,
+    make_ppo,
+    resume_or_start,
+    train,
+)
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
+from toolimit.progress import tqdm
 
 LEARNING_JSON = "learning.json"
 CLONING_JSON = "cloning.json"
