@@ -1,0 +1,39 @@
+"""Exercise 04: the behaviour-cloning loss on PPO's own policy (stage iv of the method).
+
+Grade yourself with ``pytest course/graders -k ex04`` from the repository root.
+"""
+
+from __future__ import annotations
+
+import torch
+from stable_baselines3.common.policies import ActorCriticPolicy
+
+
+def cloning_loss(policy: ActorCriticPolicy, observations: torch.Tensor, expert_actions: torch.Tensor) -> torch.Tensor:
+    """Return the behaviour-cloning loss: the mean squared error between the *mean* of the
+    policy's Gaussian for ``observations`` and ``expert_actions``.
+
+    stable-baselines3 has no pretraining, so cloning trains the ``ActorCriticPolicy`` that PPO will
+    fine-tune by ordinary supervised learning. Its action distribution is a Gaussian whose mean
+    comes from the actor network and whose standard deviation is a separate parameter
+    (``policy.log_std``). Two traps:
+
+    * ``policy(obs)`` *samples* an action from that Gaussian: fitting a sample fits noise.
+    * the standard deviation is set on purpose (the paper's authors fixed it at 0.2 rad/s; a learned
+      one collapsed), so the loss must not depend on ``policy.log_std``.
+
+    The mean is ``policy.get_distribution(observations).distribution.mean``, or step by step:
+    ``features = policy.extract_features(observations, policy.pi_features_extractor)``, then
+    ``policy.action_net(policy.mlp_extractor.forward_actor(features))``.
+
+    Args:
+        policy: an SB3 ``ActorCriticPolicy`` with a Gaussian (``DiagGaussianDistribution``) head.
+        observations: (M, D) float32 tensor of observations.
+        expert_actions: (M, N) float32 tensor of the expert's actions, normalised to [-1, 1]
+            (joint velocities as fractions of each joint's velocity limit).
+
+    Returns:
+        A scalar tensor: the squared error averaged over the M samples and the N action dimensions,
+        differentiable with respect to the actor's parameters.
+    """
+    raise NotImplementedError("exercise 04: the cloning loss on the policy's mean")

@@ -1,0 +1,81 @@
+"""Grader of exercise 04: the cloning loss, checked against the policy's own Gaussian mean.
+
+Each test builds a small SB3 ``ActorCriticPolicy`` and data from a seed, so a failure is
+reproducible: the message names the seed and what was expected.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+from stable_baselines3.common.policies import ActorCriticPolicy
+
+MODULE = "ex04_cloning_loss"
+SEEDS = range(4)
+
+
+def make_policy(seed: int, obs_dim: int = 6, act_dim: int = 3) -> ActorCriticPolicy:
+    """A small Gaussian policy (net 32-32 tanh) with a deliberately large standard deviation."""
+    torch.manual_seed(seed)
+    observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_dim,), dtype=np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, shape=(act_dim,), dtype=np.float32)
+    return ActorCriticPolicy(observation_space, action_space, lambda _: 1e-3, net_arch=[32, 32], log_std_init=0.5)
+
+
+def make_data(seed: int, m: int = 64) -> tuple[torch.Tensor, torch.Tensor]:
+    generator = torch.Generator().manual_seed(1000 + seed)
+    observations = torch.randn(m, 6, generator=generator)
+    actions = torch.clamp(0.3 * observations[:, :3] - 0.2 * observations[:, 3:], -1.0, 1.0)
+    return observations, actions
+
+
+def reference(policy: ActorCriticPolicy, observations: torch.Tensor, actions: torch.Tensor) -> torch.Tensor:
+    return torch.mean((policy.get_distribution(observations).distribution.mean - actions) ** 2)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ex04_loss_matches_the_mean_squared_error(submission, seed):
+    policy = make_policy(seed)
+    observations, actions = make_data(seed)
+    got = submission(MODULE).cloning_loss(policy, observations, actions)
+    assert isinstance(got, torch.Tensor) and got.dim() == 0, f"seed {seed}: expected a scalar tensor, got {got!r}"
+    expected = reference(policy, observations, actions)
+    assert torch.isclose(got, expected, rtol=1e-5), (
+        f"seed {seed}: expected the MSE of the Gaussian's mean, {expected.item():.6f}; got {got.item():.6f} "
+        "(a sampled action, a sum instead of a mean, or a log-likelihood give other values)")
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_ex04_loss_is_deterministic(submission, seed):
+    policy = make_policy(seed)
+    observations, actions = make_data(seed)
+    first = submission(MODULE).cloning_loss(policy, observations, actions)
+    second = submission(MODULE).cloning_loss(policy, observations, actions)
+    assert torch.equal(first, second), (f"seed {seed}: two calls gave {first.item():.6f} and {second.item():.6f}: "
+                                        "the loss must use the distribution's mean, not a sampled action")
+
+
+def test_ex04_gradient_reaches_the_actor_and_not_the_std(submission):
+    policy = make_policy(0)
+    observations, actions = make_data(0)
+    submission(MODULE).cloning_loss(policy, observations, actions).backward()
+    grad = policy.action_net.weight.grad
+    assert grad is not None and torch.any(grad != 0), "no gradient reaches policy.action_net: is the mean detached?"
+    std_grad = policy.log_std.grad
+    assert std_grad is None or torch.all(std_grad == 0), (
+        "the loss depends on policy.log_std: the standard deviation is set on purpose, never fitted")
+
+
+def test_ex04_optimising_the_loss_fits_a_linear_expert(submission):
+    policy = make_policy(1)
+    observations, actions = make_data(1, m=256)
+    optimiser = torch.optim.Adam(policy.parameters(), lr=3e-3)
+    start = reference(policy, observations, actions).item()
+    for _ in range(200):
+        optimiser.zero_grad()
+        submission(MODULE).cloning_loss(policy, observations, actions).backward()
+        optimiser.step()
+    end = reference(policy, observations, actions).item()
+    assert end < 0.1 * start, f"200 Adam steps on your loss took the mean's error from {start:.4f} to {end:.4f}"
