@@ -15,11 +15,15 @@ IPC included with ``--workers``), the rollout callbacks (policy inference and bu
 the rollout collection) and the remainder (``train()``: the gradient updates).
 
 Options explored (see the figures in the lead's closing note of issue 10):
-``--threads N`` sets ``torch.set_num_threads`` for both runs (default 1: on 2 shared cores torch's
-default of one thread per core was about 4x slower for these small networks, ceiling included);
+``--threads N`` sets ``torch.set_num_threads`` for both runs (default 1: on the 2 cores shared with
+other jobs, torch's default of one thread per core was 4-9x slower for these small networks, the
+ceiling included; with a core free, 2 threads were 1.3x (training) to 1.5x (ceiling) faster for
+1.5-1.7x the CPU, which lowers the ratio: the simulation is single-threaded);
 ``--workers K`` splits the B instances over K spawned processes, each a batched VecEnv of B / K
 instances (a second core for the physics while the main process waits); their streams differ from
-the single-process ones (seed + k per worker), which is fine for a speed figure.
+the single-process ones (seed + k per worker), which is fine for a speed figure. Measured on the
+Panda hammer (B = 16): no faster than one process (the pipes and pickled infos cost what the
+parallel halves save), so the library's single-process VecEnv stays the default.
 
 Prints steps per second (wall clock; CPU seconds of the main process alongside), the split, writes
 ``benchmarks/results/learning_throughput_<name>.json`` and ends with ``ratio R``. Keep the budget
@@ -127,8 +131,6 @@ class SplitTaskVecEnv(TrivialVecEnv):
     def __init__(self, task: LearningTask, num_envs: int, workers: int, seed: int, task_file: Path):
         super().__init__(TaskSimulator(task, 1), num_envs)
         sizes = [len(part) for part in np.array_split(np.arange(num_envs), workers)]
-        if min(sizes) < 1:
-            raise ValueError(f"--workers {workers} is more than --envs {num_envs}")
         self._bounds = np.cumsum([0, *sizes])
         context = mp.get_context("spawn")
         self._connections, self._processes = [], []
@@ -300,6 +302,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if min(args.envs, args.timesteps, args.workers, args.repeats) < 1 or args.threads < 0:
         sys.exit("--envs, --timesteps, --workers and --repeats must be >= 1, --threads >= 0")
+    if args.workers > args.envs:
+        sys.exit(f"--workers {args.workers}: more processes than instances (--envs {args.envs})")
     if args.threads > 0:
         torch.set_num_threads(args.threads)
     name, task = load_task(args)
