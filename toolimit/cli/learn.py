@@ -34,6 +34,8 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int) -> N
                         help="action noise of rollouts 2.. (fraction of the velocity limit), relabelled by the "
                              "controller (default: 0.3)")
     parser.add_argument("--clone-steps", type=int, default=6000, help="cloning Adam steps (default: 6000)")
+    parser.add_argument("--value-steps", type=int, default=2000,
+                        help="Adam steps of the value network's warm-up after cloning (default: 2000)")
     parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
 
@@ -44,6 +46,7 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
 
     for flag, value, low in (("--timesteps", args.timesteps, 0), ("--envs", args.envs, 1),
                              ("--clone-rollouts", args.clone_rollouts, 1), ("--clone-steps", args.clone_steps, 0),
+                             ("--value-steps", args.value_steps, 0),
                              ("--checkpoint-every", args.checkpoint_every, 1), ("--seed", args.seed, 0)):
         if value < low:
             raise CliError(f"{flag}: must be an integer >= {low}, got {value}")
@@ -51,7 +54,7 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
         raise CliError(f"--clone-noise: must be a finite number >= 0, got {args.clone_noise}")
     return LearningConfig(timesteps=args.timesteps, envs=args.envs, preset=args.preset, clone=not args.no_clone,
                           clone_rollouts=args.clone_rollouts, clone_noise=args.clone_noise,
-                          clone_steps=args.clone_steps, checkpoint_every=args.checkpoint_every, seed=args.seed,
+                          clone_steps=args.clone_steps, value_steps=args.value_steps, checkpoint_every=args.checkpoint_every, seed=args.seed,
                           scene_kwargs=scene_kwargs)
 
 

@@ -27,6 +27,7 @@ from toolimit.cli.learn import add_learning_arguments, learning_config
 RUN_JSON = "run.json"
 #: Budgets of --quick: minutes on a laptop, for CI and first tries.
 QUICK = {"samples": 3000, "candidates": 3, "starts": 2, "timesteps": 2_000, "envs": 4, "clone_steps": 300,
+         "value_steps": 200,
          "clone_rollouts": 2, "episodes": 4}
 
 
@@ -78,7 +79,8 @@ def run(args: argparse.Namespace) -> int:
          ["learn", "--alignment", str(alignment), "--trajectory", str(trajectory), "--out", str(learning),
           "--timesteps", str(args.timesteps), "--envs", str(args.envs), "--preset", args.preset,
           "--clone-rollouts", str(args.clone_rollouts), "--clone-noise", str(args.clone_noise),
-          "--clone-steps", str(args.clone_steps), "--checkpoint-every", str(args.checkpoint_every),
+          "--clone-steps", str(args.clone_steps), "--value-steps", str(args.value_steps),
+          "--checkpoint-every", str(args.checkpoint_every),
           "--seed", str(args.seed), *(["--no-clone"] if args.no_clone else []), *quiet]),
     ]
     times = _stage_times(args.out)

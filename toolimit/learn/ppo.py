@@ -179,8 +179,8 @@ def train(model: PPO, total_timesteps: int, directory: str | os.PathLike[str], c
     directory = Path(directory)
     remaining = total_timesteps - model.num_timesteps
     if remaining > 0:
-        model.learn(remaining, callback=CallbackList([_StdFloor(), _Checkpoints(directory, checkpoint_every),
-                                              *(callbacks or [])]),
+        model.learn(remaining, callback=CallbackList([_StdFloor(), *(callbacks or []),
+                                              _Checkpoints(directory, checkpoint_every)]),
                     reset_num_timesteps=False, log_interval=1)
     save_checkpoint(model, directory)
     with atomic_path(directory / POLICY_ZIP) as tmp:

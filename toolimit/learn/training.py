@@ -100,6 +100,7 @@ class _Curve(BaseCallback):
         self.returns: list[float] = []
         self.successes: list[bool] = []
         self.goals: list[float] = []
+        self.pending: dict[str, Any] | None = None
 
     def _on_training_start(self) -> None:
         self.bar.n = self.model.num_timesteps
@@ -115,12 +116,22 @@ class _Curve(BaseCallback):
         return True
 
     def _on_rollout_end(self) -> None:
-        if not self.returns:
-            return
-        logged = self.model.logger.name_to_value
-        record = {
+        self.pending = {
             "env_steps": int(self.model.num_timesteps), "return_mean": float(np.mean(self.returns)),
             "success_rate": float(np.mean(self.successes)), "goal_reward_mean": float(np.mean(self.goals)),
+        } if self.returns else None
+        self.returns, self.successes, self.goals = [], [], []
+
+    def _on_rollout_start(self) -> None:
+        self._write()
+
+    def _write(self) -> None:
+        """Write the last rollout's record with the update PPO then made from it (its KL, the std
+        after it): called when the next rollout starts, or when training ends."""
+        if self.pending is None:
+            return
+        logged = self.model.logger.name_to_value
+        record = self.pending | {
             "action_std_mean": float(torch.exp(self.model.policy.log_std).mean()),
             "approx_kl": float(logged.get("train/approx_kl", float("nan"))),
         }
@@ -128,9 +139,10 @@ class _Curve(BaseCallback):
             handle.write(json.dumps(record) + "\n")
         if self.on_record is not None:
             self.on_record(record)
-        self.returns, self.successes, self.goals = [], [], []
+        self.pending = None
 
     def _on_training_end(self) -> None:
+        self._write()
         self.bar.close()
 
 
