@@ -83,7 +83,8 @@ def test_ex05_surrogate_matches_stable_baselines3(submission, seed):
     clip_range = float(rng.choice([0.05, 0.1, 0.2]))
     got = float(submission(MODULE).clipped_surrogate_loss(new, old, advantages, clip_range))
     expected = sb3_policy_loss(new, old, advantages, clip_range)
-    assert np.isclose(got, expected, atol=1e-6), f"seed {seed} (clip {clip_range}): expected {expected:.6f}, got {got:.6f}"
+    assert np.isclose(got, expected, atol=1e-6), (
+        f"seed {seed} (clip {clip_range}): expected {expected:.6f}, got {got:.6f}")
 
 
 def test_ex05_surrogate_hand_case(submission):

@@ -54,7 +54,8 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
         raise CliError(f"--clone-noise: must be a finite number >= 0, got {args.clone_noise}")
     return LearningConfig(timesteps=args.timesteps, envs=args.envs, preset=args.preset, clone=not args.no_clone,
                           clone_rollouts=args.clone_rollouts, clone_noise=args.clone_noise,
-                          clone_steps=args.clone_steps, value_steps=args.value_steps, checkpoint_every=args.checkpoint_every, seed=args.seed,
+                          clone_steps=args.clone_steps, value_steps=args.value_steps,
+                          checkpoint_every=args.checkpoint_every, seed=args.seed,
                           scene_kwargs=scene_kwargs)
 
 

@@ -27,8 +27,7 @@ from toolimit.cli.learn import add_learning_arguments, learning_config
 RUN_JSON = "run.json"
 #: Budgets of --quick: minutes on a laptop, for CI and first tries.
 QUICK = {"samples": 3000, "candidates": 3, "starts": 2, "timesteps": 2_000, "envs": 4, "clone_steps": 300,
-         "value_steps": 200,
-         "clone_rollouts": 2, "episodes": 4}
+         "value_steps": 200, "clone_rollouts": 2, "episodes": 4}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
