@@ -49,6 +49,22 @@ def check_writable_folder(folder: Path, option: str) -> None:
                        f"({error.strerror})") from None
 
 
+def check_output_folder(folder: Path, option: str) -> None:
+    """CliError unless ``folder`` is (or can be made) a writable folder; checked before any work."""
+    if folder.exists() and not folder.is_dir():
+        raise CliError(f"{option}: {folder} exists and is not a folder")
+    check_writable_folder(folder, option)
+
+
+def check_output_file(path: Path | None, option: str, suffix: str) -> None:
+    """CliError unless ``path`` (when given) ends in ``suffix`` and its folder is writable."""
+    if path is None:
+        return
+    if path.suffix != suffix:
+        raise CliError(f"{option}: expected a {suffix} file name, got {path}")
+    check_writable_folder(path.parent, option)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineErrorParser(
         prog="toolimit",

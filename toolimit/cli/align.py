@@ -15,7 +15,12 @@ import os
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError, check_writable_folder
+from toolimit.cli import (
+    CliError,
+    check_output_file,
+    check_output_folder,
+    check_writable_folder,
+)
 
 DEFAULT_SAMPLES = 20_000
 #: The search's progress in the output folder while it runs (removed when it ends).
@@ -80,13 +85,8 @@ def _check_arguments(args: argparse.Namespace) -> int:
         raise CliError(f"--workers: must be a positive integer, got {workers}")
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
-    if args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out: {args.out} exists and is not a folder")
-    check_writable_folder(args.out, "--out")
-    if args.rerun is not None:
-        if args.rerun.suffix != ".rrd":
-            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
-        check_writable_folder(args.rerun.parent, "--rerun")
+    check_output_folder(args.out, "--out")
+    check_output_file(args.rerun, "--rerun", ".rrd")
     if args.html is not None:
         if args.html.suffix != ".html":
             raise CliError(f"--html: expected a .html file name, got {args.html}")

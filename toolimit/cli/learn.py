@@ -14,7 +14,11 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError, check_writable_folder
+from toolimit.cli import (
+    CliError,
+    check_output_file,
+    check_output_folder,
+)
 
 
 def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int) -> None:
@@ -99,13 +103,8 @@ def run(args: argparse.Namespace) -> int:
     config = learning_config(args)
     if args.trajectory is not None and args.alignment is None:
         raise CliError("--trajectory: needs --alignment DIR")
-    if args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out: {args.out} exists and is not a folder")
-    check_writable_folder(args.out, "--out")
-    if args.rerun is not None:
-        if args.rerun.suffix != ".rrd":
-            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
-        check_writable_folder(args.rerun.parent, "--rerun")
+    check_output_folder(args.out, "--out")
+    check_output_file(args.rerun, "--rerun", ".rrd")
     task = load_task(args)
     try:
         outcome = learn_policy(task, args.out, config, progress=not args.quiet)

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from toolimit.cli import CliError, check_writable_folder
+from toolimit.cli import CliError, check_output_folder
 from toolimit.cli.learn import add_learning_arguments, learning_config
 
 RUN_JSON = "run.json"
@@ -60,9 +60,7 @@ def run(args: argparse.Namespace) -> int:
     learning_config(args)  # checks the learning flags before any work
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
-    if args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out: {args.out} exists and is not a folder")
-    check_writable_folder(args.out, "--out")
+    check_output_folder(args.out, "--out")
     alignment, trajectory, learning = args.out / "alignment", args.out / "trajectory", args.out / "learning"
     quiet = ["--quiet"] if args.quiet else []
     time_scale = "auto" if args.world == "3d" else "1"

@@ -12,7 +12,11 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError, check_writable_folder
+from toolimit.cli import (
+    CliError,
+    check_output_file,
+    check_output_folder,
+)
 
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
 
@@ -98,13 +102,8 @@ def run(args: argparse.Namespace) -> int:
     for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
         if not (value >= 0 and value < float("inf")):
             raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
-    if args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out: {args.out} exists and is not a folder")
-    check_writable_folder(args.out, "--out")
-    if args.rerun is not None:
-        if args.rerun.suffix != ".rrd":
-            raise CliError(f"--rerun: expected a .rrd file name, got {args.rerun}")
-        check_writable_folder(args.rerun.parent, "--rerun")
+    check_output_folder(args.out, "--out")
+    check_output_file(args.rerun, "--rerun", ".rrd")
     if args.select_by_robot and args.alignment is None:
         raise CliError("--select-by-robot: needs --alignment DIR (the candidates of an alignment)")
     if args.alignment is not None:
