@@ -21,12 +21,12 @@ from toolimit.cli import (
 )
 
 
-def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int) -> None:
+def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | None) -> None:
     """The budget and learner flags shared by ``toolimit learn`` and ``toolimit run``."""
     from toolimit.learn.ppo import PRESETS
 
     parser.add_argument("--timesteps", type=int, default=timesteps,
-                        help=f"PPO environment steps (default: {timesteps})")
+                        help=f"PPO environment steps (default: {timesteps or '300000 planar, 1500000 3d'})")
     parser.add_argument("--envs", type=int, default=16, help="instances stepped together (default: 16)")
     parser.add_argument("--preset", choices=sorted(PRESETS), default="authors",
                         help="PPO settings: the authors' or the project's looser gradient clip (default: authors)")
