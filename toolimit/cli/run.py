@@ -9,7 +9,7 @@ what that command writes. Run again, the command skips every stage whose output 
 resumes the first one that is not (alignment and learning continue from their checkpoints).
 OUT/run.json keeps each stage's wall time; OUT/evaluation.json has ``success_rate``,
 ``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included) and
-``wall_time_s`` (all stages, over every invocation). Exit codes: 0 done, 1 a stage found nothing
+``wall_time_s`` (alignment to evaluation, over every invocation). Exit codes: 0 done, 1 a stage found nothing
 (no alignment candidate, no robot replay with a reward), 2 bad input, 130 interrupted.
 """
 
