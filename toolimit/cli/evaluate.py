@@ -10,8 +10,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, check_writable_folder
+
+if TYPE_CHECKING:
+    from toolimit.learn.evaluate import Evaluation
+    from toolimit.learn.task import LearningTask
 
 EVALUATION_JSON = "evaluation.json"
 
@@ -26,16 +31,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def evaluation_record(policy_dir: Path, episodes: int, seed: int) -> dict:
-    """Deterministic and stochastic evaluations of the policy in ``policy_dir``, as JSON."""
+def evaluation_record(policy_dir: Path, episodes: int, seed: int) -> tuple[dict, Evaluation, LearningTask]:
+    """Deterministic and stochastic evaluations of the policy in ``policy_dir``: the JSON record,
+    the deterministic evaluation (its joint trajectories serve the export) and the task."""
     from toolimit.learn.evaluate import evaluate
     from toolimit.learn.training import load_policy
 
     model, task = load_policy(policy_dir)
     deterministic = evaluate(model, task, episodes, deterministic=True, seed=seed)
     stochastic = evaluate(model, task, episodes, deterministic=False, seed=seed)
-    return {"tool": task.tool, "world": task.world, "robot": task.robot, "seed": seed,
-            **deterministic.record(), "stochastic": stochastic.record()}
+    record = {"tool": task.tool, "world": task.world, "robot": task.robot, "seed": seed,
+              **deterministic.record(), "stochastic": stochastic.record()}
+    return record, deterministic, task
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--policy: no such folder: {args.policy}")
     out = args.out or args.policy / EVALUATION_JSON
     check_writable_folder(out.parent, "--out")
-    record = evaluation_record(args.policy, args.episodes, args.seed)
+    record, _, _ = evaluation_record(args.policy, args.episodes, args.seed)
     save_json(out, record)
     print(f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "
           f"(stochastic) over {args.episodes} episodes; goal reward {record['goal_reward_mean']:.1f}; wrote {out}")

@@ -19,10 +19,15 @@ import argparse
 import json
 import time
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from toolimit.cli import CliError, check_output_folder
 from toolimit.cli.learn import add_learning_arguments, learning_config
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from toolimit.learn.task import LearningTask
 
 RUN_JSON = "run.json"
 #: PPO steps by default, per world (measured: the planar spade succeeds after 300 k; the Panda
@@ -103,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
         if code != 0:
             return code
     started = time.perf_counter()
-    record = evaluation_record(learning, args.episodes, seed=1000)
+    record, evaluation, task = evaluation_record(learning, args.episodes, seed=1000)
     times["evaluation"] = time.perf_counter() - started
     _save_stage_times(args.out, times)
     learned = json.loads((learning / "learning.json").read_text())
@@ -112,23 +117,22 @@ def run(args: argparse.Namespace) -> int:
     from toolimit.artifacts import save_json
 
     save_json(args.out / EVALUATION_JSON, record)
-    code = _export_rollout(args, learning, toolimit)
+    code = _export_rollout(args, evaluation.joint_positions[0], task, toolimit)
     print(f"success rate {record['success_rate']:.2f} over {record['episodes']} episodes, goal reward "
           f"{record['goal_reward_mean']:.1f}, {record['env_steps']} env steps, {record['wall_time_s']:.0f} s; "
           f"wrote {args.out / EVALUATION_JSON}")
     return code
 
 
-def _export_rollout(args: argparse.Namespace, learning: Path, toolimit: Callable[[list[str]], int]) -> int:
-    """The policy's deterministic rollout to OUT/policy_rollout (stage iii's format), exported by
-    ``toolimit export`` to OUT/export for robots with published limits; the export's exit code."""
+def _export_rollout(args: argparse.Namespace, joint_positions: np.ndarray, task: LearningTask,
+                    toolimit: Callable[[list[str]], int]) -> int:
+    """The policy's first deterministic evaluation episode, joints (H+1, N) rad, to
+    OUT/policy_rollout (stage iii's format), exported by ``toolimit export`` to OUT/export for
+    robots with published limits; the export's exit code."""
     from toolimit.deploy.limits import SUPPORTED_ROBOTS
-    from toolimit.learn.evaluate import evaluate, save_rollout_trajectory
-    from toolimit.learn.training import load_policy
+    from toolimit.learn.evaluate import save_rollout_trajectory
 
-    model, task = load_policy(learning)
-    rollout = evaluate(model, task, episodes=1, deterministic=True, seed=1000)
-    folder = save_rollout_trajectory(rollout.joint_positions[0], task, args.out / "policy_rollout")
+    folder = save_rollout_trajectory(joint_positions, task, args.out / "policy_rollout")
     if args.robot not in SUPPORTED_ROBOTS:
         print(f"[export] skipped: {args.robot} has no published acceleration and jerk limits "
               f"(the policy's rollout is in {folder})")

@@ -86,13 +86,10 @@ def make_ppo(env: BatchedTaskVecEnv, settings: PpoSettings, seed: int = 0, learn
         gamma=settings.gamma, gae_lambda=settings.gae_lambda, clip_range=settings.clip_range,
         normalize_advantage=settings.normalize_advantage, ent_coef=settings.ent_coef, vf_coef=settings.vf_coef,
         max_grad_norm=settings.max_grad_norm, target_kl=settings.target_kl, seed=seed, device="cpu", verbose=0,
-        policy_kwargs={"net_arch": {"pi": [400, 300], "vf": [400, 300]}, "activation_fn": torch.nn.Tanh,
-                       "log_std_init": float(np.mean(np.log(std)))},
+        policy_kwargs={"net_arch": {"pi": [400, 300], "vf": [400, 300]}, "activation_fn": torch.nn.Tanh},
     )
-    with torch.no_grad():
-        model.policy.log_std.copy_(torch.as_tensor(np.log(std), dtype=torch.float32))
-    if not learn_std:
-        fix_action_std(model.policy, std)
+    fix_action_std(model.policy, std)
+    model.policy.log_std.requires_grad_(learn_std)
     return model
 
 

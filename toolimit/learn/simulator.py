@@ -118,9 +118,7 @@ class TaskSimulator:
 
     # ------------------------------------------------------------------------------- observation
     def _update_tool(self, first: bool = False) -> None:
-        positions, rotations = np.empty((self.batch_size, 3)), np.empty((self.batch_size, 3, 3))
-        for i, q in enumerate(self.q):
-            positions[i], rotations[i] = self.robot.tool_pose(q, self.task.base)
+        positions, rotations = self.robot.tool_poses(self.q, self.task.base)
         quaternion = Rotation.from_matrix(rotations).as_quat(scalar_first=True)
         reference = np.where(first, np.array([1.0, 0.0, 0.0, 0.0]), self._quaternion)
         quaternion *= np.where(np.sum(quaternion * reference, axis=1, keepdims=True) < 0.0, -1.0, 1.0)
