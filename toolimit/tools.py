@@ -20,6 +20,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from toolimit.errors import InputError
+
 
 class ToolPose(NamedTuple):
     """Poses of the tool frame in the world frame.
@@ -65,7 +67,7 @@ def tool_spec(name: str) -> ToolSpec:
     try:
         return TOOLS[name]
     except KeyError:
-        raise ValueError(f"unknown tool {name!r}; known tools: {', '.join(sorted(TOOLS))}") from None
+        raise InputError(f"unknown tool {name!r}; known tools: {', '.join(sorted(TOOLS))}") from None
 
 
 def swing_rotation(axis: np.ndarray) -> np.ndarray:

@@ -32,9 +32,10 @@ from toolimit.align.sampler import (
 )
 from toolimit.demos.cleaning import CleaningReport, clean_demo
 from toolimit.demos.tool_demo import ToolDemo
+from toolimit.errors import InputError, InvalidSceneParameters
 from toolimit.interrupts import Interrupted, interruptible, starting_processes
 from toolimit.progress import tqdm
-from toolimit.scenes.base import InvalidSceneParameters, ParameterSpec, Scene
+from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
 
@@ -323,7 +324,7 @@ def align(
     """
     config = config or AlignmentConfig()
     if not (isinstance(workers, int) and workers >= 1):
-        raise ValueError(f"workers: expected a positive integer, got {workers!r}")
+        raise InputError(f"workers: expected a positive integer, got {workers!r}")
     started = time.perf_counter()
     cleaning = None
     if clean:

@@ -1,8 +1,9 @@
 """The ``toolimit`` command: one sub-command module per pipeline stage.
 
 Each module in ``COMMANDS`` exposes ``register(subparsers)``, which adds its sub-command and sets
-``func`` to a function ``(args) -> int``. User errors raise :class:`CliError` (or a ValueError /
-OSError from the library): they print one line and exit with code 2, with no traceback. SIGINT
+``func`` to a function ``(args) -> int``. User errors (a :class:`toolimit.errors.ToolimitError`, such as
+:class:`CliError`, or an OSError for a missing or unreadable file) print one line and exit with
+code 2; anything else is a bug in the package and shows its traceback. SIGINT
 and SIGTERM stop a command with exit code 130 / 143 and one line, no traceback
 (:mod:`toolimit.interrupts`; a command may catch the interruption first to say what it saved).
 """
@@ -17,13 +18,14 @@ from pathlib import Path
 from typing import NoReturn
 
 from toolimit import interrupts
+from toolimit.errors import InputError, ToolimitError
 
 COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.replay", "toolimit.cli.trajopt",
             "toolimit.cli.export", "toolimit.cli.learn", "toolimit.cli.evaluate", "toolimit.cli.run")
 
 
-class CliError(Exception):
-    """A user error: bad argument, missing or malformed file."""
+class CliError(InputError):
+    """A user error found by the command line: a bad argument, a missing or malformed file."""
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
@@ -86,9 +88,8 @@ def main(argv: list[str] | None = None) -> int:
     except interrupts.Interrupted as stop:
         print(f"toolimit {args.command}: interrupted ({stop.signal_name})", file=sys.stderr)
         return stop.exit_code
-    except (CliError, ValueError, OSError, KeyError) as error:
-        message = str(error) if not isinstance(error, KeyError) else f"missing key {error}"
-        print(f"toolimit {args.command}: error: {message}", file=sys.stderr)
+    except (ToolimitError, OSError) as error:
+        print(f"toolimit {args.command}: error: {error}", file=sys.stderr)
         return 2
     finally:
         if argv is None:

@@ -51,7 +51,7 @@ def run_synth(args: argparse.Namespace) -> int:
 def run_show(args: argparse.Namespace) -> int:
     from toolimit.align.keypoints import velocity_keypoints
     from toolimit.demos import clean_demo, load_demo
-    from toolimit.demos.tool_demo import DemoError
+    from toolimit.errors import DemoError
 
     demo = load_demo(args.path, tool=args.tool)
     print(f"{args.path}: {demo.tool}, {demo.n_frames} frames at {demo.fps:g} fps ({demo.duration:.2f} s)")

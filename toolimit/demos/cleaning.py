@@ -45,7 +45,8 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.signal import savgol_filter
 
-from toolimit.demos.tool_demo import DemoError, ToolDemo
+from toolimit.demos.tool_demo import ToolDemo
+from toolimit.errors import DemoError
 
 _MAD_TO_SIGMA = 1.4826
 

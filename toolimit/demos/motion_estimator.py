@@ -35,7 +35,8 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.demos.tool_demo import DemoError, ToolDemo
+from toolimit.demos.tool_demo import ToolDemo
+from toolimit.errors import DemoError
 from toolimit.tools import tool_spec
 
 #: Indices of the left and right toes in the estimator's 24-joint rig (its ``mfv_person_joints.txt``).

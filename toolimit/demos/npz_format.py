@@ -27,7 +27,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from toolimit.artifacts import atomic_path
-from toolimit.demos.tool_demo import DemoError, ToolDemo
+from toolimit.demos.tool_demo import ToolDemo
+from toolimit.errors import DemoError
 from toolimit.tools import ToolPose, tool_spec
 
 #: Spade tip frame -> handle end: ``p_handle = p_tip - R_tip @ SPADE_TIP_TO_HANDLE`` (metres).

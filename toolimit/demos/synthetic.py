@@ -23,7 +23,8 @@ from typing import Callable
 
 import numpy as np
 
-from toolimit.demos.tool_demo import DemoError, ToolDemo
+from toolimit.demos.tool_demo import ToolDemo
+from toolimit.errors import DemoError
 from toolimit.tools import tool_spec
 
 #: Demonstration length bounds, seconds.

@@ -10,14 +10,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from toolimit.errors import DemoError
+
 #: Fewer frames than this cannot hold a tool motion worth aligning (a fraction of a second).
 MIN_FRAMES = 10
 #: A tool shorter than this (head to handle end, metres) is taken as a broken reconstruction.
 MIN_TOOL_LENGTH = 0.05
-
-
-class DemoError(ValueError):
-    """A demonstration is malformed: the message names the field, the shape or the value."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -12,12 +12,8 @@ from toolimit.deploy.export import (
     plan_export,
 )
 from toolimit.deploy.limits import SUPPORTED_ROBOTS, JointLimits, published_limits
-from toolimit.deploy.retime import (
-    PathOutsideLimits,
-    RetimedPath,
-    SampledTrajectory,
-    retime,
-)
+from toolimit.deploy.retime import RetimedPath, SampledTrajectory, retime
+from toolimit.errors import PathOutsideLimits
 
 __all__ = [
     "SUPPORTED_ROBOTS",

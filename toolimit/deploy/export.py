@@ -43,6 +43,7 @@ from toolimit.deploy.retime import (
     SampledTrajectory,
     retime,
 )
+from toolimit.errors import InputError
 
 TRAJECTORY_CSV = "joint_trajectory.csv"
 SUMMARY_JSON = "joint_trajectory.json"
@@ -69,30 +70,30 @@ def load_trajectory(directory: str | Path) -> JointTrajectory:
     with np.load(path, allow_pickle=False) as data:
         missing = [key for key in ("q", "v", "base", "joint_names", "dt") if key not in data]
         if missing:
-            raise ValueError(f"{path}: missing field(s) {', '.join(missing)}")
+            raise InputError(f"{path}: missing field(s) {', '.join(missing)}")
         q = np.asarray(data["q"], dtype=float)
         v = np.asarray(data["v"], dtype=float)
         base = np.asarray(data["base"], dtype=float)
         joint_names = tuple(str(name) for name in np.atleast_1d(data["joint_names"]))
         dt = float(data["dt"])
     if q.ndim != 2 or len(q) < 2:
-        raise ValueError(f"{path}: q must have shape (T+1, N) with T >= 1, got {q.shape}")
+        raise InputError(f"{path}: q must have shape (T+1, N) with T >= 1, got {q.shape}")
     n_steps, n_joints = len(q) - 1, q.shape[1]
     if v.shape != (n_steps, n_joints):
-        raise ValueError(f"{path}: v must have shape {(n_steps, n_joints)} to match q {q.shape}, got {v.shape}")
+        raise InputError(f"{path}: v must have shape {(n_steps, n_joints)} to match q {q.shape}, got {v.shape}")
     if base.shape != (3,):
-        raise ValueError(f"{path}: base must have shape (3,), got {base.shape}")
+        raise InputError(f"{path}: base must have shape (3,), got {base.shape}")
     if len(joint_names) != n_joints:
-        raise ValueError(f"{path}: joint_names has {len(joint_names)} names for {n_joints} joints in q")
+        raise InputError(f"{path}: joint_names has {len(joint_names)} names for {n_joints} joints in q")
     if not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"{path}: dt must be a positive number of seconds, got {dt}")
+        raise InputError(f"{path}: dt must be a positive number of seconds, got {dt}")
     for name, array in (("q", q), ("v", v), ("base", base)):
         if not np.all(np.isfinite(array)):
-            raise ValueError(f"{path}: {name} contains non-finite values")
+            raise InputError(f"{path}: {name} contains non-finite values")
     mismatch = np.abs(np.diff(q, axis=0) / dt - v)
     if mismatch.max() > _VELOCITY_CONSISTENCY_TOL:
         t, j = np.unravel_index(np.argmax(mismatch), mismatch.shape)
-        raise ValueError(f"{path}: v[{t}, {j}] differs from (q[{t + 1}] - q[{t}]) / dt by {mismatch[t, j]:.3g} rad/s")
+        raise InputError(f"{path}: v[{t}, {j}] differs from (q[{t + 1}] - q[{t}]) / dt by {mismatch[t, j]:.3g} rad/s")
     return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt)
 
 
@@ -121,10 +122,10 @@ def plan_export(trajectory: JointTrajectory, limits: JointLimits, rate: float = 
     mismatched joints or a bad rate.
     """
     if tuple(trajectory.joint_names) != limits.joint_names:
-        raise ValueError(f"trajectory joints {list(trajectory.joint_names)} do not match "
+        raise InputError(f"trajectory joints {list(trajectory.joint_names)} do not match "
                          f"{limits.robot}'s joints {list(limits.joint_names)}")
     if not (math.isfinite(rate) and rate > 0):
-        raise ValueError(f"rate must be a positive number of Hz, got {rate}")
+        raise InputError(f"rate must be a positive number of Hz, got {rate}")
     path = retime(trajectory.q, trajectory.dt, limits, subdivisions)
     samples = path.sample(rate)
     checks = check_samples(limits, samples.times, samples.as_dict())

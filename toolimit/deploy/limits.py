@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from toolimit.errors import InputError
+
 QUANTITIES = ("position", "velocity", "acceleration", "jerk")
 UNITS = {"position": "rad", "velocity": "rad/s", "acceleration": "rad/s^2", "jerk": "rad/s^3"}
 
@@ -77,7 +79,7 @@ def published_limits(robot: str) -> JointLimits:
     try:
         return _PUBLISHED[robot]
     except KeyError:
-        raise ValueError(
+        raise InputError(
             f"export supports only robots with published position, velocity, acceleration and jerk limits "
             f"({', '.join(SUPPORTED_ROBOTS)}); {robot!r} is not one of them"
         ) from None

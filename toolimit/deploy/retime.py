@@ -40,6 +40,7 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from toolimit.deploy.limits import JointLimits
+from toolimit.errors import PathOutsideLimits
 
 DEGREE = 3
 #: Pieces per segment between two samples in the control polygon (see :func:`retime`).
@@ -55,10 +56,6 @@ METHOD = (
     "jerk control point exceeded its limit (convex-hull bound: the limits hold at every instant); "
     "the final position is held after the end"
 )
-
-
-class PathOutsideLimits(ValueError):
-    """A sample of the path lies outside a position limit: no timing can fix it."""
 
 
 @dataclass(frozen=True)

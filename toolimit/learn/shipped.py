@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from toolimit.errors import InputError
 from toolimit.learn.task import LearningTask
 
 TASKS_DIR = Path(__file__).resolve().parent / "tasks"
@@ -31,14 +32,14 @@ def shipped_tasks() -> list[tuple[str, str, str]]:
 
 
 def shipped_task(tool: str, world: str, robot: str | None = None) -> LearningTask:
-    """The shipped task; ValueError listing the shipped ones if there is none for these names."""
+    """The shipped task; InputError listing the shipped ones if there is none for these names."""
     if (tool, world) not in DEFAULT_ROBOTS:
-        raise ValueError(f"no environment for the {tool!r} in world {world!r}; "
+        raise InputError(f"no environment for the {tool!r} in world {world!r}; "
                          f"known: {', '.join(f'{t}/{w}' for t, w in DEFAULT_ROBOTS)}")
     path = shipped_task_path(tool, world, robot)
     if not path.is_file():
         known = ", ".join("/".join(names) for names in shipped_tasks())
         name = robot or DEFAULT_ROBOTS[(tool, world)]
-        raise ValueError(f"no shipped task for the {tool} in {world} with robot {name}; shipped: {known}; "
+        raise InputError(f"no shipped task for the {tool} in {world} with robot {name}; shipped: {known}; "
                          "build your own with `toolimit run` and pass task=DIR/task.npz")
     return LearningTask.load(path)

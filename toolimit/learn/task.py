@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from toolimit.artifacts import save_npz
+from toolimit.errors import InputError
 from toolimit.robots import RobotModel
 from toolimit.scenes.base import Scene, SceneParams
 from toolimit.tools import ToolPose
@@ -33,7 +34,7 @@ TASK_NPZ = "task.npz"
 _REQUIRED = ("tool", "world", "robot", "joint_names", "reference_q", "base", "horizon", "control_dt", "time_scale")
 
 
-class TaskFileError(ValueError):
+class TaskFileError(InputError):
     """A task file that is missing or malformed; the message names the file and the problem."""
 
 

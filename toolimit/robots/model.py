@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from toolimit.errors import InputError
 from toolimit.tools import ToolSpec
 
 #: Names of the three base coordinates, in order.
@@ -150,7 +151,7 @@ class RobotModel:
         """
         frames = {"local": pin.ReferenceFrame.LOCAL, "world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED}
         if reference not in frames:
-            raise ValueError(f"reference must be one of {sorted(frames)}, got {reference!r}")
+            raise InputError(f"reference must be one of {sorted(frames)}, got {reference!r}")
         q_full = self.full_configuration(q, base)
         pin.computeJointJacobians(self.full_model, self._full_data, q_full)
         pin.updateFramePlacements(self.full_model, self._full_data)

@@ -7,6 +7,7 @@ from typing import Callable
 
 import pinocchio as pin
 
+from toolimit.errors import InputError
 from toolimit.robots import arms
 from toolimit.robots.model import ArmDescription, RobotModel, build_robot_model
 from toolimit.tools import tool_spec
@@ -38,7 +39,7 @@ def make_robot(
         base_height: height of the base above the floor (m), replacing the robot's default.
     """
     if name not in _BUILDERS:
-        raise ValueError(f"unknown robot {name!r}; known robots: {', '.join(ROBOTS)}")
+        raise InputError(f"unknown robot {name!r}; known robots: {', '.join(ROBOTS)}")
     return build_robot_model(_arm(name), tool_spec(tool), tool_placement, base_height)
 
 

@@ -1,12 +1,7 @@
 """Scenes: simulated worlds a tool moves through (planar on pymunk, 3D batched particles)."""
 
-from toolimit.scenes.base import (
-    CONTROL_FPS,
-    InvalidSceneParameters,
-    ParameterSpec,
-    Scene,
-    SceneParams,
-)
+from toolimit.errors import InvalidSceneParameters
+from toolimit.scenes.base import CONTROL_FPS, ParameterSpec, Scene, SceneParams
 from toolimit.scenes.registry import available_scenes, make_scene, register_scene
 
 __all__ = [

@@ -18,6 +18,7 @@ from typing import Literal, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
+from toolimit.errors import InvalidSceneParameters
 from toolimit.tools import ToolPose
 
 #: Control rate of the paper: scenes step the tool at this rate and sub-step their physics.
@@ -50,10 +51,6 @@ class ParameterSpec:
     on_ground: bool = True
     unit: str = ""
     description: str = ""
-
-
-class InvalidSceneParameters(ValueError):
-    """Parameters that make a scene impossible (overlap, out of bounds); the message says why."""
 
 
 @runtime_checkable

@@ -9,6 +9,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from toolimit.errors import InputError
 from toolimit.scenes.base import Scene
 
 WORLDS = ("planar", "3d")
@@ -36,11 +37,11 @@ def register_scene(tool: str, world: str, entry_point: str) -> None:
 def make_scene(tool: str, world: str, **kwargs: Any) -> Scene:
     """A new scene for ``tool`` in ``world``; keyword arguments go to its constructor."""
     if world not in WORLDS:
-        raise ValueError(f"unknown world {world!r}; known worlds: {', '.join(WORLDS)}")
+        raise InputError(f"unknown world {world!r}; known worlds: {', '.join(WORLDS)}")
     try:
         entry_point = _ENTRY_POINTS[(tool, world)]
     except KeyError:
         tools = sorted({t for t, w in _ENTRY_POINTS if w == world})
-        raise ValueError(f"unknown tool {tool!r} for world {world!r}; known tools: {', '.join(tools)}") from None
+        raise InputError(f"unknown tool {tool!r} for world {world!r}; known tools: {', '.join(tools)}") from None
     module_name, class_name = entry_point.split(":")
     return getattr(importlib.import_module(module_name), class_name)(**kwargs)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.robots import RobotModel
 from toolimit.scenes.base import Scene, SceneParams
 from toolimit.tools import ToolPose
@@ -45,13 +46,13 @@ def execute_in_scene(robot: RobotModel, trajectory: TrajectoryResult, scene: Sce
     scene element's footprint (``scene.footprints()``).
     """
     if tuple(trajectory.joint_names) != tuple(robot.joint_names):
-        raise ValueError(f"trajectory joints {trajectory.joint_names} are not robot {robot.name}'s {robot.joint_names}")
+        raise InputError(f"trajectory joints {trajectory.joint_names} are not robot {robot.name}'s {robot.joint_names}")
     scene.reset(params, rng, batch_size)
     footprints = np.asarray(scene.footprints(), dtype=float).reshape(-1, 5)
     hit = base_in_footprints(trajectory.base, footprints)
     if hit is not None:
         x, y = trajectory.base[:2]
-        raise ValueError(
+        raise BaseInsideFootprint(
             f"robot base at (x={x:.3f}, y={y:.3f}) m stands inside scene element {hit} "
             f"(footprint centre {footprints[hit, :2].round(3).tolist()}, "
             f"half sizes {footprints[hit, 2:4].round(3).tolist()})"

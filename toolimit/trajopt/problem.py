@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from toolimit.errors import InputError
 from toolimit.robots import RobotModel
 
 
@@ -43,7 +44,7 @@ class TrackingWeights:
         for name in ("position", "rotation", "velocity", "posture"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
-                raise ValueError(f"weight {name} must be finite and >= 0, got {value}")
+                raise InputError(f"weight {name} must be finite and >= 0, got {value}")
 
     @property
     def pose_diagonal(self) -> np.ndarray:
@@ -69,16 +70,16 @@ class PoseTargets:
         positions = np.asarray(self.positions, dtype=float)
         rotations = np.asarray(self.rotations, dtype=float)
         if positions.ndim != 2 or positions.shape[1] != 3 or len(positions) < 1:
-            raise ValueError(f"target positions must have shape (T, 3) with T >= 1, got {positions.shape}")
+            raise InputError(f"target positions must have shape (T, 3) with T >= 1, got {positions.shape}")
         if rotations.shape != (len(positions), 3, 3):
-            raise ValueError(f"target rotations must have shape ({len(positions)}, 3, 3), got {rotations.shape}")
+            raise InputError(f"target rotations must have shape ({len(positions)}, 3, 3), got {rotations.shape}")
         if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(rotations))):
-            raise ValueError("target poses contain non-finite values")
+            raise InputError("target poses contain non-finite values")
         orthogonality = np.abs(np.swapaxes(rotations, 1, 2) @ rotations - np.eye(3)).max()
         if orthogonality > 1e-6 or np.any(np.linalg.det(rotations) < 0):
-            raise ValueError(f"target rotations must be proper rotations (max |R^T R - I| = {orthogonality:.2e})")
+            raise InputError(f"target rotations must be proper rotations (max |R^T R - I| = {orthogonality:.2e})")
         if not (np.isfinite(self.fps) and self.fps > 0):
-            raise ValueError(f"fps must be positive, got {self.fps}")
+            raise InputError(f"fps must be positive, got {self.fps}")
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "rotations", rotations)
         object.__setattr__(self, "fps", float(self.fps))
@@ -94,14 +95,14 @@ class PoseTargets:
         quaternions_wxyz = np.asarray(quaternions_wxyz, dtype=float)
         positions = np.asarray(positions, dtype=float)
         if quaternions_wxyz.ndim != 2 or quaternions_wxyz.shape[1] != 4:
-            raise ValueError(f"tip_quaternion_wxyz must have shape (T, 4), got {quaternions_wxyz.shape}")
+            raise InputError(f"tip_quaternion_wxyz must have shape (T, 4), got {quaternions_wxyz.shape}")
         if len(quaternions_wxyz) != len(positions):
-            raise ValueError(
+            raise InputError(
                 f"tip_quaternion_wxyz has {len(quaternions_wxyz)} rows but tip_position has {len(positions)}"
             )
         norms = np.linalg.norm(quaternions_wxyz, axis=1)
         if not np.all(np.isfinite(norms) & (norms > 1e-9)):
-            raise ValueError("tip_quaternion_wxyz has zero or non-finite rows")
+            raise InputError("tip_quaternion_wxyz has zero or non-finite rows")
         w, x, y, z = (quaternions_wxyz / norms[:, None]).T
         rotations = np.stack(
             [

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from toolimit.artifacts import atomic_path
+from toolimit.errors import InputError
 
 TRAJECTORY_NPZ = "trajectory.npz"
 TRAJECTORY_JSON = "trajectory.json"
@@ -139,11 +140,11 @@ class TrajectoryResult:
         with np.load(npz_path) as arrays:
             missing = {"q", "v", "base", "joint_names", "dt"} - set(arrays.files)
             if missing:
-                raise ValueError(f"{npz_path}: missing keys {sorted(missing)}")
+                raise InputError(f"{npz_path}: missing keys {sorted(missing)}")
             q, v, base = arrays["q"], arrays["v"], arrays["base"]
             joint_names, dt = tuple(str(n) for n in arrays["joint_names"]), float(arrays["dt"])
         if q.ndim != 2 or v.shape != (len(q) - 1, q.shape[1]) or base.shape != (3,) or len(joint_names) != q.shape[1]:
-            raise ValueError(f"{npz_path}: inconsistent shapes q {q.shape}, v {v.shape}, base {base.shape}, "
+            raise InputError(f"{npz_path}: inconsistent shapes q {q.shape}, v {v.shape}, base {base.shape}, "
                              f"joint_names {len(joint_names)}")
         document = json.loads(json_path.read_text())
         return cls(

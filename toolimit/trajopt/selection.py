@@ -16,6 +16,7 @@ from typing import Callable
 
 import numpy as np
 
+from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.progress import tqdm
 from toolimit.robots.model import RobotModel
 from toolimit.scenes.base import SceneParams
@@ -91,14 +92,14 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
         missing = [k for k in ("tip_position", "tip_quaternion_wxyz", "fps", "tool", "scene_world",
                                "alignment_reward") if k not in arrays.files]
         if missing:
-            raise ValueError(f"{path}: missing keys {missing}")
+            raise InputError(f"{path}: missing keys {missing}")
         positions, quaternions = arrays["tip_position"], arrays["tip_quaternion_wxyz"]
         fps = float(arrays["fps"])
         rewards = arrays["alignment_reward"]
         params = {k.removeprefix("param_"): arrays[k] for k in arrays.files if k.startswith("param_")}
         tool, world = str(arrays["tool"]), str(arrays["scene_world"])
     if positions.ndim != 3 or positions.shape[2] != 3 or quaternions.shape[:2] != positions.shape[:2]:
-        raise ValueError(f"{path}: tip_position must be (K, T, 3) and tip_quaternion_wxyz (K, T, 4), "
+        raise InputError(f"{path}: tip_position must be (K, T, 3) and tip_quaternion_wxyz (K, T, 4), "
                          f"got {positions.shape} and {quaternions.shape}")
     candidates = [
         AlignedCandidate(
@@ -129,7 +130,7 @@ def select_by_robot_execution(
     the scene's element footprints.
     """
     if not candidates:
-        raise ValueError("no alignment candidate to select from")
+        raise InputError("no alignment candidate to select from")
     scene = make_scene(tool, world)
     trajectories, rewards, refusals = [], [], []
     for k, candidate in enumerate(tqdm(candidates, desc="robot execution", unit="candidate", disable=not progress)):
@@ -140,7 +141,7 @@ def select_by_robot_execution(
             trajectory = solve(robot, candidate.targets, candidate_options, rng)
             reward = float(np.mean(execute_in_scene(robot, trajectory, scene, candidate.params, rng, replays)))
             refusal = None
-        except ValueError as error:
+        except BaseInsideFootprint as error:
             reward, refusal = float("nan"), str(error)
             trajectory = None
         trajectories.append(trajectory)

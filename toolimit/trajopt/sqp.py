@@ -44,6 +44,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from toolimit.errors import InputError, SolverFailure
 from toolimit.trajopt.problem import TrackingProblem
 
 
@@ -81,14 +82,14 @@ class SqpOptions:
 
     def __post_init__(self) -> None:
         if self.max_iterations < 0:
-            raise ValueError(f"max_iterations must be >= 0, got {self.max_iterations}")
+            raise InputError(f"max_iterations must be >= 0, got {self.max_iterations}")
         for name in ("relative_tolerance", "osqp_eps"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+                raise InputError(f"{name} must be positive, got {getattr(self, name)}")
         if self.initial_damping < 0:
-            raise ValueError(f"initial_damping must be >= 0, got {self.initial_damping}")
+            raise InputError(f"initial_damping must be >= 0, got {self.initial_damping}")
         if self.line_search_steps < 1:
-            raise ValueError(f"line_search_steps must be >= 1, got {self.line_search_steps}")
+            raise InputError(f"line_search_steps must be >= 1, got {self.line_search_steps}")
 
 
 @dataclass(frozen=True)
@@ -227,7 +228,7 @@ class _TrackingQp:
         usable = (osqp.SolverStatus.OSQP_SOLVED, osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
                   osqp.SolverStatus.OSQP_MAX_ITER_REACHED)
         if status not in usable or result.x is None or not np.all(np.isfinite(result.x)):
-            raise RuntimeError(f"OSQP failed on the tracking QP: {result.info.status}")
+            raise SolverFailure(f"OSQP failed on the tracking QP: {result.info.status}")
         return result.x, int(result.info.iter)
 
 

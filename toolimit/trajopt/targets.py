@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE
+from toolimit.errors import InputError
 from toolimit.trajopt.problem import PoseTargets
 
 if TYPE_CHECKING:
@@ -26,7 +27,7 @@ def targets_from_alignment(result: AlignmentResult, candidate: Candidate | None 
     what ``toolimit trajopt --alignment DIR`` reads from ``DIR/aligned_demo.npz``."""
     candidate = candidate if candidate is not None else result.best
     if candidate is None:
-        raise ValueError("the alignment has no candidate: no sample earned a goal reward")
+        raise InputError("the alignment has no candidate: no sample earned a goal reward")
     _, _, poses = result.aligned_motion(candidate)
     return PoseTargets(poses.position, poses.rotation, result.demo.fps)
 
@@ -39,20 +40,20 @@ def load_pose_targets(path: str | os.PathLike[str]) -> PoseTargets:
     try:
         arrays = np.load(path)
     except (ValueError, OSError) as error:
-        raise ValueError(f"{path}: not a readable .npz file ({error})") from None
+        raise InputError(f"{path}: not a readable .npz file ({error})") from None
     with arrays:
         missing = [key for key in ("tip_position", "tip_quaternion_wxyz", "fps") if key not in arrays.files]
         if missing:
-            raise ValueError(f"{path}: missing keys {missing} (needs tip_position, tip_quaternion_wxyz, fps)")
+            raise InputError(f"{path}: missing keys {missing} (needs tip_position, tip_quaternion_wxyz, fps)")
         positions = np.asarray(arrays["tip_position"], dtype=float)
         quaternions = np.asarray(arrays["tip_quaternion_wxyz"], dtype=float)
         fps = float(np.asarray(arrays["fps"]).reshape(()))
     if positions.ndim != 2 or positions.shape[1] != 3:
-        raise ValueError(f"{path}: tip_position must have shape (T, 3), got {positions.shape}")
+        raise InputError(f"{path}: tip_position must have shape (T, 3), got {positions.shape}")
     try:
         return PoseTargets.from_quaternions(positions, quaternions, fps)
     except ValueError as error:
-        raise ValueError(f"{path}: {error}") from None
+        raise InputError(f"{path}: {error}") from None
 
 
 def from_original_spade_tip(targets: PoseTargets) -> PoseTargets:

@@ -30,6 +30,7 @@ from typing import Callable
 import numpy as np
 import pinocchio as pin
 
+from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.progress import tqdm
 from toolimit.robots import RobotModel
 from toolimit.trajopt.initial_guess import ik_rollout
@@ -76,14 +77,14 @@ class TrackOptions:
 
     def __post_init__(self) -> None:
         if self.starts < 1:
-            raise ValueError(f"starts must be >= 1, got {self.starts}")
+            raise InputError(f"starts must be >= 1, got {self.starts}")
         if not (np.isfinite(self.time_scale) and self.time_scale > 0):
-            raise ValueError(f"time_scale must be positive, got {self.time_scale}")
+            raise InputError(f"time_scale must be positive, got {self.time_scale}")
         if not self.start_radius > 0:
-            raise ValueError(f"start_radius must be positive, got {self.start_radius}")
+            raise InputError(f"start_radius must be positive, got {self.start_radius}")
         unknown = set(self.initialisations) - set(INITIALISATIONS)
         if not self.initialisations or unknown:
-            raise ValueError(f"initialisations must be a non-empty subset of {INITIALISATIONS}, "
+            raise InputError(f"initialisations must be a non-empty subset of {INITIALISATIONS}, "
                              f"got {self.initialisations}")
 
 
@@ -173,7 +174,7 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
                     if not inside:
                         runs.append((outcome.cost, variant_index, start_index, initialisation, outcome, problem))
     if not runs:
-        raise ValueError(f"every one of the {rejected} solutions puts the robot base inside a scene element")
+        raise BaseInsideFootprint(f"every one of the {rejected} solutions puts the robot base inside a scene element")
     cost, variant_index, start_index, initialisation, best, problem = min(runs, key=lambda run: run[0])
     statistics = {
         "cost": cost,

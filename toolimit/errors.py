@@ -1,0 +1,40 @@
+"""The package's errors: one base, :class:`ToolimitError`, and its named kinds.
+
+A ``ToolimitError`` says the *input* cannot be used (a malformed file, an unknown name, an
+impossible scene, a base no robot may stand on, a path no timing can fix, a QP OSQP cannot
+solve): the command line answers it with one line and exit code 2. Anything else raised inside
+the package (a plain ``ValueError`` about an array's shape, a ``RuntimeError``) is a bug, and
+shows its traceback. Each kind also derives from the built-in error it replaces (``ValueError``,
+``RuntimeError``), so ``except ValueError`` around a call keeps working.
+"""
+
+from __future__ import annotations
+
+
+class ToolimitError(Exception):
+    """The base of every error that names a problem with the input, not with the package."""
+
+
+class InputError(ToolimitError, ValueError):
+    """Bad user input: an unknown name, an argument out of range, a missing field or a malformed file
+    (the message names the file, field, shape or value)."""
+
+
+class DemoError(InputError):
+    """A demonstration is malformed: the message names the field, the shape or the value."""
+
+
+class InvalidSceneParameters(InputError):
+    """Parameters that make a scene impossible (overlap, out of bounds); the message says why."""
+
+
+class BaseInsideFootprint(ToolimitError, ValueError):
+    """The robot's base stands inside a scene element (every solution found, or the one given)."""
+
+
+class PathOutsideLimits(ToolimitError, ValueError):
+    """A limit violation no timing can fix: a sample of the path lies outside a position limit."""
+
+
+class SolverFailure(ToolimitError, RuntimeError):
+    """A solver gave up on a problem (OSQP did not solve a tracking QP); the message gives its status."""
