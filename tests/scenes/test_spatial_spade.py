@@ -136,13 +136,13 @@ def test_scripted_scoop_carry_tip_moves_at_least_ten_spheres_into_the_box(scoope
 def test_success_needs_ten_spheres_for_half_of_the_steps(scooped: SpatialSpadeScene) -> None:
     scooped = copy.deepcopy(scooped)  # the module's fixture stays as the motion left it
     assert not np.any(scooped.is_success()), "the spheres arrived late in the motion"
-    steps = scooped.steps
+    steps = scooped.success_tracker.steps
     for _ in range(steps):
         scooped.step(scooped.tool_pose)
         if np.all(scooped.is_success()):
             break
     assert np.all(scooped.is_success())
-    assert scooped.successful_steps[0] >= scooped.steps / 2
+    assert scooped.success_tracker.successful_steps[0] >= scooped.success_tracker.steps / 2
 
 
 def test_dense_reward_counts_sand_on_the_spade_while_carried() -> None:

@@ -24,6 +24,13 @@ from toolimit.tools import ToolPose
 #: Control rate of the paper: scenes step the tool at this rate and sub-step their physics.
 CONTROL_FPS = 24.0
 
+#: Half side of the square world (m, world x and y) every scene element stands in.
+WORLD_HALF_SIZE = 5.0
+
+#: A step-counting scene (the spades) succeeds when its goal was met on at least this fraction of
+#: the steps since reset (the paper: the goal holds for half of the episode).
+SUCCESS_FRACTION = 0.5
+
 #: Scene parameter values: a position parameter is a (3,) world point, a uniform one a float.
 SceneParams = Mapping[str, "np.ndarray | float"]
 
@@ -38,10 +45,14 @@ class ParameterSpec:
             Gaussian mixture around the demonstration's keypoints; ``"uniform"``: a scalar sampled
             uniformly in ``[low, high]``.
         low, high: for ``"uniform"``, the bounds (floats); for ``"position"``, (3,) bounds of the
-            element's admissible position relative to nothing (world frame), used to reject samples.
+            element's admissible position (world frame, m); :func:`parameter_violation` rejects a
+            value outside them.
         on_ground: for ``"position"``: the element stands on the ground, so alignment sets z = 0.
         unit: unit of a uniform parameter ("m", "rad", ...), for reports.
         description: one line for reports and notebooks.
+        axes: for ``"position"``: the coordinates (0 = x, 1 = y, 2 = z) the scene reads and checks
+            against the bounds; a planar scene ignores the others.
+        bound_reason: why the bounds are what they are, added to the message of a value outside them.
     """
 
     name: str
@@ -51,6 +62,8 @@ class ParameterSpec:
     on_ground: bool = True
     unit: str = ""
     description: str = ""
+    axes: tuple[int, ...] = (0, 1, 2)
+    bound_reason: str = ""
 
 
 @runtime_checkable
@@ -110,6 +123,56 @@ class Scene(Protocol):
 
 
 # --- helpers for scene implementations -----------------------------------------------------------
+def parameter_violation(parameters: tuple[ParameterSpec, ...], params: SceneParams) -> str | None:
+    """Why ``params`` do not meet the specs, or None: a missing name, a position that is not a finite
+    (3,) world point or lies outside [low, high] on one of its ``axes``, a uniform value that is not a
+    number in [low, high]. A scene adds its own rules (overlap) after this check."""
+    for spec in parameters:
+        if spec.name not in params:
+            return f"missing parameter {spec.name!r}"
+        value = np.asarray(params[spec.name], dtype=float)
+        if spec.kind == "uniform":
+            low, high = float(spec.low), float(spec.high)  # type: ignore[arg-type]
+            if value.shape != () or not np.isfinite(value) or not low <= value <= high:
+                return f"{spec.name} must be a number in [{low:.4g}, {high:.4g}], got {value.tolist()}"
+            continue
+        if value.shape != (3,) or not np.all(np.isfinite(value)):
+            return f"parameter {spec.name!r} must be a finite (3,) world point, got {value.tolist()} of shape {value.shape}"
+        lows, highs = np.broadcast_to(spec.low, 3), np.broadcast_to(spec.high, 3)
+        for axis in spec.axes:
+            if not lows[axis] <= value[axis] <= highs[axis]:
+                reason = f" ({spec.bound_reason})" if spec.bound_reason else ""
+                return (f"{spec.name} {'xyz'[axis]} = {value[axis]:.3f} m is outside the world bound "
+                        f"[{lows[axis]:.4g}, {highs[axis]:.4g}] m{reason}")
+    return None
+
+
+def require_reset(scene: Scene) -> None:
+    """RuntimeError unless ``scene`` was reset (its batch size is 0 until then)."""
+    if scene.batch_size == 0:
+        raise RuntimeError(f"{type(scene).__name__}: call reset() first")
+
+
+class SuccessTracker:
+    """Per instance, the steps since reset on which the goal was met; success is meeting it on at
+    least :data:`SUCCESS_FRACTION` of them (the spades' test)."""
+
+    def __init__(self, batch_size: int) -> None:
+        self.steps = 0
+        self.successful_steps = np.zeros(batch_size, dtype=int)  # (B,)
+
+    def record(self, goal_met: np.ndarray) -> None:
+        """Count one step; ``goal_met`` (B,) bool says where the goal was met at its end."""
+        self.steps += 1
+        self.successful_steps += goal_met
+
+    def is_success(self) -> np.ndarray:
+        """(B,) bool; False everywhere before the first step."""
+        if self.steps == 0:
+            return np.zeros(len(self.successful_steps), dtype=bool)
+        return self.successful_steps >= SUCCESS_FRACTION * self.steps
+
+
 def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:
     """Validate a ``reset`` call before any work; returns B as an int.
 

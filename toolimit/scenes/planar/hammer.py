@@ -37,15 +37,17 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     check_reset,
+    parameter_violation,
+    require_reset,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
 
-#: Nail positions beyond this |x| (m) or above this height (m) are rejected.
-WORLD_HALF_EXTENT = 5.0
+#: Nail positions above this height (m) are rejected.
 MAX_NAIL_HEIGHT = 3.0
 #: Half-length (m) of the board block along x.
 BOARD_HALF_LENGTH = 0.15
@@ -107,35 +109,19 @@ class PlanarHammerScene:
         self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
         self.parameters = (
             ParameterSpec(
-                "nail_position", "position", (-WORLD_HALF_EXTENT, -WORLD_HALF_EXTENT, self.protrusion),
-                (WORLD_HALF_EXTENT, WORLD_HALF_EXTENT, MAX_NAIL_HEIGHT), on_ground=False, unit="m",
+                "nail_position", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, self.protrusion),
+                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, MAX_NAIL_HEIGHT), on_ground=False, unit="m",
                 description=f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
+                axes=(0, 2), bound_reason="the board surface, one protrusion below the nail's top, may not be "
+                "below the ground (z = 0)",
             ),
         )
         self.batch_size = 0
 
-    def _require_reset(self) -> None:
-        if self.batch_size == 0:
-            raise RuntimeError(f"{type(self).__name__}: call reset() first")
-
     # ----------------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make a scene: missing/malformed, out of bounds, board below ground."""
-        if "nail_position" not in params:
-            return "missing parameter 'nail_position'"
-        nail = np.asarray(params["nail_position"], dtype=float)
-        if nail.shape != (3,) or not np.all(np.isfinite(nail)):
-            return f"parameter 'nail_position' must be a finite (3,) world point, got {nail!r}"
-        if abs(nail[0]) > WORLD_HALF_EXTENT:
-            return f"nail_position x = {nail[0]:.3f} m is outside the world |x| <= {WORLD_HALF_EXTENT} m"
-        if nail[2] < self.protrusion:
-            return (
-                f"nail_position z = {nail[2]:.3f} m puts the board surface {nail[2] - self.protrusion:.3f} m "
-                "below the ground (z = 0)"
-            )
-        if nail[2] > MAX_NAIL_HEIGHT:
-            return f"nail_position z = {nail[2]:.3f} m is above the world's {MAX_NAIL_HEIGHT} m ceiling"
-        return None
+        """Why ``params`` cannot make a scene: against the specs (|x| > 5 m, board below the ground)."""
+        return parameter_violation(self.parameters, params)
 
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
@@ -184,7 +170,7 @@ class PlanarHammerScene:
 
     def step(self, tool_pose: ToolPose) -> None:
         """Move the hammer to ``tool_pose`` over ``control_dt`` (velocity-driven) and simulate."""
-        self._require_reset()
+        require_reset(self)
         first = not self._tool.placed
         self._tool.begin_step(tool_pose, self.control_dt)
         head_local = self._tool.local_points(self._head_corners)
@@ -207,18 +193,18 @@ class PlanarHammerScene:
     # ----------------------------------------------------------------------------------- rewards
     def travel(self) -> np.ndarray:
         """(B,) how far each nail has been driven down from its start, m, in [0, protrusion]."""
-        self._require_reset()
+        require_reset(self)
         y = np.array([nail.position.y for nail in self._nails])
         return np.clip(self.nail_start[1] - y, 0.0, self.protrusion)
 
     def goal_reward(self) -> np.ndarray:
         """(B,) 1 where less than ``planted_tolerance`` of the travel is left, else 0."""
-        self._require_reset()
+        require_reset(self)
         return (self.protrusion - self.travel() < self.planted_tolerance).astype(float)
 
     def dense_reward(self) -> np.ndarray:
         """(B,) -(hammer head to nail head top distance, m) + travel / protrusion."""
-        self._require_reset()
+        require_reset(self)
         depth = self.travel() / self.protrusion
         if not self._tool.placed:
             return depth
@@ -227,20 +213,20 @@ class PlanarHammerScene:
 
     def is_success(self) -> np.ndarray:
         """(B,) the nail was planted within ``success_window`` s of the first step's start."""
-        self._require_reset()
+        require_reset(self)
         return self._planted_at <= self.success_window + 1e-9
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self) -> np.ndarray:
         """(1, 5) the board under the nail (x, y, half-length, half-width, yaw), m/rad; the planar
         world spans the y axis, so the half-width is large (10 m)."""
-        self._require_reset()
+        require_reset(self)
         return np.array([[self.nail_start[0], 0.0, BOARD_HALF_LENGTH, 10.0, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``nail_top`` (3,) world head-top point, ``travel`` (), ``board`` (2, 3) the
         board block's min and max corners (y = 0), ``hammer_head`` (8, 3) world corners (if placed)."""
-        self._require_reset()
+        require_reset(self)
         travel = self.travel()[0]
         x, z = self.nail_start
         board_top = z - self.protrusion

@@ -31,15 +31,15 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     check_reset,
+    parameter_violation,
+    require_reset,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
-
-#: Patch centres beyond this |x| or |y| (m) are rejected.
-WORLD_HALF_EXTENT = 5.0
 
 
 class PlanarScytheScene:
@@ -83,28 +83,17 @@ class PlanarScytheScene:
         self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
         self.parameters = (
             ParameterSpec(
-                "grass_position", "position", (-WORLD_HALF_EXTENT, -WORLD_HALF_EXTENT, 0.0),
-                (WORLD_HALF_EXTENT, WORLD_HALF_EXTENT, 0.0), on_ground=True, unit="m",
+                "grass_position", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m", axes=(0, 1),
                 description=f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
             ),
         )
         self.batch_size = 0
 
-    def _require_reset(self) -> None:
-        if self.batch_size == 0:
-            raise RuntimeError(f"{type(self).__name__}: call reset() first")
-
     # ----------------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make a scene: missing/malformed or |x|, |y| > 5 m."""
-        if "grass_position" not in params:
-            return "missing parameter 'grass_position'"
-        grass = np.asarray(params["grass_position"], dtype=float)
-        if grass.shape != (3,) or not np.all(np.isfinite(grass)):
-            return f"parameter 'grass_position' must be a finite (3,) world point, got {grass!r}"
-        if np.any(np.abs(grass[:2]) > WORLD_HALF_EXTENT):
-            return f"grass_position {grass[:2]} m is outside the world |x|, |y| <= {WORLD_HALF_EXTENT} m"
-        return None
+        """Why ``params`` cannot make a scene: against the specs (|x|, |y| > 5 m)."""
+        return parameter_violation(self.parameters, params)
 
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
@@ -125,7 +114,7 @@ class PlanarScytheScene:
 
     def step(self, tool_pose: ToolPose) -> None:
         """Move the blade to ``tool_pose`` over ``control_dt`` and cut what it sweeps."""
-        self._require_reset()
+        require_reset(self)
         first = not self._tool.placed
         previous = self._tool.pose
         start_position, start_angle = self._tool.position.copy(), self._tool.angle.copy()
@@ -177,12 +166,12 @@ class PlanarScytheScene:
     # ----------------------------------------------------------------------------------- rewards
     def goal_reward(self) -> np.ndarray:
         """(B,) number of stalks cut."""
-        self._require_reset()
+        require_reset(self)
         return self.cut.sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
         """(B,) stalks cut - plane distance (m) from the blade segment to the nearest uncut stalk."""
-        self._require_reset()
+        require_reset(self)
         cut_count = self.goal_reward()
         if not self._tool.placed:
             return cut_count
@@ -196,20 +185,20 @@ class PlanarScytheScene:
 
     def is_success(self) -> np.ndarray:
         """(B,) every stalk was cut within ``success_window`` s of the first step's start."""
-        self._require_reset()
+        require_reset(self)
         return self._all_cut_at <= self.success_window + 1e-9
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self) -> np.ndarray:
         """(1, 5) the grass patch's bounding square (x, y, half-length, half-width, yaw), m/rad."""
-        self._require_reset()
+        require_reset(self)
         half = self.patch_diameter / 2.0
         return np.array([[self.grass_centre[0], self.grass_centre[1], half, half, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``stalks`` (M, 3) world foot points, ``cut`` (M,) bool, ``blade`` (2, 3) world
         root and tip (if placed)."""
-        self._require_reset()
+        require_reset(self)
         stalks = np.zeros((self.stalk_count, 3))
         stalks[:, :2] = self.stalks[0]
         snapshot = {"stalks": stalks, "cut": self.cut[0].copy()}

@@ -42,9 +42,13 @@ import pymunk.batch
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
+    SuccessTracker,
     check_reset,
+    parameter_violation,
+    require_reset,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.scenes.planar.sand_pile import (
@@ -58,8 +62,6 @@ from toolimit.scenes.planar.sand_pile import (
 )
 from toolimit.tools import ToolPose, tool_spec
 
-#: Element positions beyond this |x| (m) are rejected: the planar world is a 10 m strip.
-WORLD_HALF_EXTENT = 5.0
 #: Thickness of tray and box walls, m.
 WALL_THICKNESS = 0.02
 #: Minimum free gap between the deposit's and the goal box's outer walls, m.
@@ -135,33 +137,23 @@ class PlanarSpadeScene:
         self.sleeping = bool(sleeping)
         spec = tool_spec("spade")
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
-        low, high = (-WORLD_HALF_EXTENT, -WORLD_HALF_EXTENT, 0.0), (WORLD_HALF_EXTENT, WORLD_HALF_EXTENT, 0.0)
+        low, high = (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0), (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0)
         self.parameters = (
             ParameterSpec("sand_position", "position", low, high, on_ground=True, unit="m",
-                          description="centre of the sand deposit tray on the ground (x used)"),
+                          description="centre of the sand deposit tray on the ground (x used)", axes=(0,)),
             ParameterSpec("goal_position", "position", low, high, on_ground=True, unit="m",
-                          description="centre of the open goal box on the ground (x used)"),
+                          description="centre of the open goal box on the ground (x used)", axes=(0,)),
         )
         self.batch_size = 0
         self._spaces: list[pymunk.Space] = []
 
-    def _require_reset(self) -> None:
-        if self.batch_size == 0:
-            raise RuntimeError(f"{type(self).__name__}: call reset() first")
-
     # ----------------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make a scene: missing/malformed, |x| > 5 m, deposit and box overlap."""
-        xs = {}
-        for spec in self.parameters:
-            if spec.name not in params:
-                return f"missing parameter {spec.name!r}"
-            value = np.asarray(params[spec.name], dtype=float)
-            if value.shape != (3,) or not np.all(np.isfinite(value)):
-                return f"parameter {spec.name!r} must be a finite (3,) world point, got {value!r}"
-            if abs(value[0]) > WORLD_HALF_EXTENT:
-                return f"{spec.name} x = {value[0]:.3f} m is outside the world |x| <= {WORLD_HALF_EXTENT} m"
-            xs[spec.name] = value[0]
+        """Why ``params`` cannot make a scene: against the specs (|x| > 5 m), deposit and box overlap."""
+        violation = parameter_violation(self.parameters, params)
+        if violation is not None:
+            return violation
+        xs = {name: float(np.asarray(params[name], dtype=float)[0]) for name in ("sand_position", "goal_position")}
         gap = abs(xs["sand_position"] - xs["goal_position"]) - (
             self.deposit_half_width + self.goal_half_width + 2 * WALL_THICKNESS
         )
@@ -219,12 +211,11 @@ class PlanarSpadeScene:
             for bodies, box in zip(self._sand_bodies, self._boxes)
         ]
         self._sand, self._box_x = self._read_bodies()
-        self._steps = 0
-        self._successful_steps = np.zeros(batch_size, dtype=int)
+        self.success_tracker = SuccessTracker(batch_size)
 
     def step(self, tool_pose: ToolPose) -> None:
         """Move the spade to ``tool_pose`` over ``control_dt`` (velocity-driven) and simulate."""
-        self._require_reset()
+        require_reset(self)
         first = not self._tool.placed
         self._tool.begin_step(tool_pose, self.control_dt)
         self._update_outline(self._tool.local_points(self._outline))
@@ -237,8 +228,7 @@ class PlanarSpadeScene:
                 space.step(dt)
         self._tool.end_step()
         self._sand, self._box_x = self._read_bodies()
-        self._steps += 1
-        self._successful_steps += self.goal_reward() >= self.success_count
+        self.success_tracker.record(self.goal_reward() >= self.success_count)
 
     def _update_outline(self, local: np.ndarray) -> None:
         """Reshape the segments to the projected outline (B, 4, 2) where it changed by > 0.1 mm."""
@@ -279,12 +269,12 @@ class PlanarSpadeScene:
 
     def goal_reward(self) -> np.ndarray:
         """(B,) number of sand circles in the goal box."""
-        self._require_reset()
+        require_reset(self)
         return self._in_goal_box().sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
         """(B,) -(mean circle distance to the box centre) - (tip distance to the nearest circle outside), m."""
-        self._require_reset()
+        require_reset(self)
         box_centre = np.stack([self._box_x, np.full(self.batch_size, 0.5 * self.goal_wall_height)], -1)
         sand_to_box = np.linalg.norm(self._sand - box_centre[:, None, :], axis=-1).mean(axis=1)
         if not self._tool.placed:
@@ -296,16 +286,14 @@ class PlanarSpadeScene:
 
     def is_success(self) -> np.ndarray:
         """(B,) >= success_count circles in the box for at least half of the steps since reset."""
-        self._require_reset()
-        if self._steps == 0:
-            return np.zeros(self.batch_size, dtype=bool)
-        return 2 * self._successful_steps >= self._steps
+        require_reset(self)
+        return self.success_tracker.is_success()
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self) -> np.ndarray:
         """(2, 5) deposit and goal box rectangles (x, y, half-length, half-width, yaw), m/rad, where
         they stand at reset. The planar world spans the y axis, so the half-width is large (10 m)."""
-        self._require_reset()
+        require_reset(self)
         return np.array([
             [self.sand_x, 0.0, self.deposit_half_width + WALL_THICKNESS, 10.0, 0.0],
             [self.goal_x, 0.0, self.goal_half_width + WALL_THICKNESS, 10.0, 0.0],
@@ -314,7 +302,7 @@ class PlanarSpadeScene:
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``sand`` (N, 3) world centres (y = 0), ``sand_radius`` (), ``walls`` (4, 2, 3)
         wall bottom/top points, ``tool_segments`` (3, 2, 3) blade/lip/handle end points (if placed)."""
-        self._require_reset()
+        require_reset(self)
         sand = np.zeros((self.sand_count, 3))
         sand[:, [0, 2]] = self._sand[0]
         walls = []

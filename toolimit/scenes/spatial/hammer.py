@@ -26,12 +26,15 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     batched_pose,
     check_reset,
+    parameter_violation,
     require_counts,
     require_positive,
+    require_reset,
 )
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import interpolate_poses
@@ -137,12 +140,13 @@ class SpatialHammerScene:
             ParameterSpec(
                 "nail_position",
                 "position",
-                low=(-5.0, -5.0, lowest_head_top),
-                high=(5.0, 5.0, 1.5),
+                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, lowest_head_top),
+                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 1.5),
                 on_ground=False,
                 unit="m",
                 description="initial top of the nail head (the board's top is "
                 f"{lowest_head_top * 1000:.0f} mm below it)",
+                bound_reason="the board under the nail must stand on the ground",
             ),
         )
         self.batch_size = 0
@@ -151,22 +155,8 @@ class SpatialHammerScene:
 
     # ----------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make this scene, or None."""
-        if "nail_position" not in params:
-            return "missing parameter 'nail_position'"
-        position = np.asarray(params["nail_position"], dtype=float)
-        if position.shape != (3,):
-            return f"nail_position must have shape (3,), got {position.shape}"
-        if not np.all(np.isfinite(position)):
-            return f"nail_position must be finite, got {position.tolist()}"
-        spec = self.parameters[0]
-        low, high = np.asarray(spec.low), np.asarray(spec.high)
-        if np.any(position < low) or np.any(position > high):
-            return (
-                f"nail_position {np.round(position, 4).tolist()} is outside [{low.tolist()}, {high.tolist()}] "
-                "(the board under the nail must stand on the ground)"
-            )
-        return None
+        """Why ``params`` cannot make this scene (against the specs), or None."""
+        return parameter_violation(self.parameters, params)
 
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build B nails at ``params["nail_position"]``; the hammer is absent until ``step``.
@@ -204,8 +194,7 @@ class SpatialHammerScene:
     # -------------------------------------------------------------------------------- physics
     def step(self, tool_pose: ToolPose) -> None:
         """Move the hammer to ``tool_pose`` over ``control_dt`` and simulate the nail."""
-        if self.batch_size == 0:
-            raise RuntimeError("call reset() before step()")
+        require_reset(self)
         position, rotation = batched_pose(tool_pose, self.batch_size)
         if self.tool_position is None:
             self.tool_position, self.tool_rotation = position, rotation

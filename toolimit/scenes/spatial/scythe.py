@@ -23,12 +23,15 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     batched_pose,
     check_reset,
+    parameter_violation,
     require_counts,
     require_positive,
+    require_reset,
 )
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
@@ -146,11 +149,12 @@ class SpatialScytheScene:
             ParameterSpec(
                 "grass_position",
                 "position",
-                low=(-5.0, -5.0, 0.0),
-                high=(5.0, 5.0, 0.0),
+                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
                 on_ground=True,
                 unit="m",
                 description="centre of the grass patch on the ground",
+                bound_reason="the patch lies on the ground, z = 0",
             ),
             ParameterSpec(
                 "grass_yaw", "uniform", low=-np.pi, high=np.pi, unit="rad", description="patch orientation about z"
@@ -160,22 +164,8 @@ class SpatialScytheScene:
 
     # ----------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make this scene, or None."""
-        for spec in self.parameters:
-            if spec.name not in params:
-                return f"missing parameter {spec.name!r}"
-        position = np.asarray(params["grass_position"], dtype=float)
-        if position.shape != (3,) or not np.all(np.isfinite(position)):
-            return f"grass_position must be a finite (3,) point, got {np.asarray(params['grass_position']).tolist()}"
-        low, high = np.asarray(self.parameters[0].low), np.asarray(self.parameters[0].high)
-        if np.any(position[:2] < low[:2]) or np.any(position[:2] > high[:2]):
-            return f"grass_position {np.round(position, 4).tolist()} is outside x, y in [-5, 5] m"
-        if abs(position[2]) > 1e-9:
-            return f"grass_position must be on the ground (z = 0), got z = {position[2]}"
-        yaw = float(np.asarray(params["grass_yaw"], dtype=float))
-        if not (np.isfinite(yaw) and -np.pi <= yaw <= np.pi):
-            return f"grass_yaw must be in [-pi, pi], got {yaw}"
-        return None
+        """Why ``params`` cannot make this scene (against the specs: x, y within the world, on the ground), or None."""
+        return parameter_violation(self.parameters, params)
 
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Scatter B patches of stalks (each from ``rng``); the scythe is absent until ``step``."""
@@ -197,8 +187,7 @@ class SpatialScytheScene:
     # -------------------------------------------------------------------------------- physics
     def step(self, tool_pose: ToolPose) -> None:
         """Move the scythe to ``tool_pose`` over ``control_dt`` and cut the stalks it crosses."""
-        if self.batch_size == 0:
-            raise RuntimeError("call reset() before step()")
+        require_reset(self)
         position, rotation = batched_pose(tool_pose, self.batch_size)
         if self.tool_position is None:
             self.tool_position, self.tool_rotation = position, rotation

@@ -66,10 +66,13 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
+    SuccessTracker,
     batched_pose,
     check_reset,
+    parameter_violation,
     require_counts,
     require_positive,
 )
@@ -86,8 +89,6 @@ from toolimit.scenes.spatial.tool_geometry import (
 )
 from toolimit.tools import ToolPose, rotation_z
 
-#: Half side of the square region (m, world x and y) where scene elements may stand.
-WORLD_HALF_SIZE = 5.0
 #: Inner side of the square sand deposit (m), its wall height and thickness (m).
 DEPOSIT_INNER = 0.4
 DEPOSIT_WALL_HEIGHT = 0.07
@@ -98,9 +99,8 @@ GOAL_WALL_HEIGHT = 0.07
 GOAL_REGION_HEIGHT = 0.1
 #: Wall thickness of the deposit and the goal box (m).
 WALL_THICKNESS = 0.01
-#: Spheres in the box needed at a step for it to count towards success, and the fraction of steps.
+#: Spheres in the box needed at a step for it to count towards success (scenes.base.SUCCESS_FRACTION of the steps).
 SUCCESS_SPHERES = 10
-SUCCESS_FRACTION = 0.5
 #: The heap: spheres dropped one every HEAP_DROP_SPACING m in height from a column with
 #: horizontal N(0, HEAP_DROP_SIGMA) m offsets into a closed square pen of inner side HEAP_PEN, and
 #: simulated to rest; each instance then shifts it by up to +-(DEPOSIT_INNER - HEAP_PEN) / 2 in x and y.
@@ -252,7 +252,7 @@ class SpatialSpadeScene:
             ParameterSpec(
                 "sand_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
                 high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
-                description="centre of the sand deposit's floor",
+                description="centre of the sand deposit's floor", axes=(0, 1),
             ),
             ParameterSpec(
                 "sand_yaw", "uniform", low=-np.pi, high=np.pi, unit="rad",
@@ -261,7 +261,7 @@ class SpatialSpadeScene:
             ParameterSpec(
                 "goal_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
                 high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
-                description="centre of the goal box's floor",
+                description="centre of the goal box's floor", axes=(0, 1),
             ),
         )
         self.batch_size = 0
@@ -278,18 +278,10 @@ class SpatialSpadeScene:
         ])
 
     def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make this scene (missing, malformed, out of bounds, overlap), or None."""
-        for spec in self.parameters:
-            if spec.name not in params:
-                return f"missing parameter {spec.name!r}"
-            value = np.asarray(params[spec.name], dtype=float)
-            if spec.kind == "position":
-                if value.shape != (3,) or not np.all(np.isfinite(value)):
-                    return f"{spec.name} must be a finite (3,) point, got {value.tolist()}"
-                if np.any(np.abs(value[:2]) > WORLD_HALF_SIZE):
-                    return f"{spec.name} {np.round(value, 3).tolist()} is beyond the world bound +-{WORLD_HALF_SIZE} m"
-            elif value.shape != () or not np.isfinite(value) or not spec.low <= value <= spec.high:
-                return f"{spec.name} must be a number in [{spec.low:.4g}, {spec.high:.4g}], got {value.tolist()}"
+        """Why ``params`` cannot make this scene (against the specs, overlap), or None."""
+        violation = parameter_violation(self.parameters, params)
+        if violation is not None:
+            return violation
         deposit, goal = self._footprints_of(params)
         if _rectangles_overlap(deposit, goal):
             return "the sand deposit and the goal box overlap"
@@ -316,9 +308,8 @@ class SpatialSpadeScene:
         shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
         self._world = ParticleWorld(self.material, self.walls, self.shapes)
         self._world.reset(self.sand_position + (heap + shift) @ deposit_rotation.T)
-        #: Control steps since reset, and (B,) steps that ended with >= SUCCESS_SPHERES in the box.
-        self.steps = 0
-        self.successful_steps = np.zeros(b, dtype=int)
+        #: Steps that ended with >= SUCCESS_SPHERES in the box.
+        self.success_tracker = SuccessTracker(b)
 
     def _require_reset(self) -> ParticleWorld:
         if self._world is None:
@@ -337,8 +328,7 @@ class SpatialSpadeScene:
             world.advance(self.control_dt, self.substeps)
         else:
             world.advance(self.control_dt, self.substeps, position, rotation)
-        self.steps += 1
-        self.successful_steps += self.goal_reward() >= SUCCESS_SPHERES
+        self.success_tracker.record(self.goal_reward() >= SUCCESS_SPHERES)
 
     # ----------------------------------------------------------------------------------- rewards
     @property
@@ -419,9 +409,7 @@ class SpatialSpadeScene:
     def is_success(self) -> np.ndarray:
         """(B,) bool: >= 10 spheres in the box during at least half of the steps so far."""
         self._require_reset()
-        if self.steps == 0:
-            return np.zeros(self.batch_size, dtype=bool)
-        return self.successful_steps >= SUCCESS_FRACTION * self.steps
+        return self.success_tracker.is_success()
 
     # ------------------------------------------------------------------------------------- views
     def footprints(self) -> np.ndarray:

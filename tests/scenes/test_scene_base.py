@@ -1,0 +1,38 @@
+"""The scene helpers every scene shares: the spec-driven parameter check and the success tracker."""
+
+import numpy as np
+import pytest
+
+from toolimit.scenes.base import WORLD_HALF_SIZE, ParameterSpec, SuccessTracker, parameter_violation
+
+SPECS = (
+    ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.1), (WORLD_HALF_SIZE,) * 2 + (2.0,),
+                  axes=(0, 2), bound_reason="the box stands above the floor"),
+    ParameterSpec("yaw", "uniform", -np.pi, np.pi),
+)
+GOOD = {"box": np.array([1.0, 9.0, 0.5]), "yaw": 0.3}  # y is not one of the checked axes
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({}, None),
+    ({"box": np.array([6.0, 0.0, 0.5])}, "box x = 6.000 m is outside the world bound [-5, 5] m (the box stands"),
+    ({"box": np.array([0.0, 0.0, 0.0])}, "box z = 0.000 m is outside the world bound [0.1, 2] m"),
+    ({"box": np.array([0.0, np.nan, 0.5])}, "must be a finite (3,) world point"),
+    ({"box": np.zeros(2)}, "of shape (2,)"),
+    ({"yaw": 4.0}, "yaw must be a number in [-3.142, 3.142], got 4.0"),
+])
+def test_parameter_violation_names_the_parameter_the_axis_and_the_bound(change, message):
+    reason = parameter_violation(SPECS, {**GOOD, **change})
+    assert reason is None if message is None else message in reason
+
+
+def test_parameter_violation_names_a_missing_parameter():
+    assert parameter_violation(SPECS, {"yaw": 0.0}) == "missing parameter 'box'"
+
+
+def test_success_tracker_needs_the_goal_on_half_of_the_steps():
+    tracker = SuccessTracker(batch_size=2)
+    assert not tracker.is_success().any()
+    for met in ([True, False], [False, False], [True, True], [False, False]):
+        tracker.record(np.array(met))
+    assert tracker.is_success().tolist() == [True, False]  # 2 of 4 steps, 1 of 4 steps
