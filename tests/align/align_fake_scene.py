@@ -58,8 +58,9 @@ class FakeTargetScene:
     def is_success(self) -> np.ndarray:
         return self.hit.copy()
 
-    def footprints(self) -> np.ndarray:
-        return np.array([[self.target[0], self.target[1], 0.05, 0.05, 0.0]])
+    def footprints(self, params) -> np.ndarray:
+        target = np.asarray(params["target"], dtype=float)
+        return np.array([[target[0], target[1], 0.05, 0.05, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         return {"target": self.target.copy(), "radius": np.array(self.radius[0])}

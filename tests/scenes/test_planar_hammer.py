@@ -126,7 +126,7 @@ def test_invalid_parameters_are_rejected_with_a_reason():
 def test_footprints_and_snapshot():
     scene = PlanarHammerScene()
     scene.reset({"nail_position": NAIL}, np.random.default_rng(0))
-    assert scene.footprints().shape == (1, 5)
+    assert scene.footprints({"nail_position": NAIL}).shape == (1, 5)
     snapshot = scene.snapshot()
     np.testing.assert_allclose(snapshot["nail_top"], NAIL)
     assert snapshot["board"][1, 2] == pytest.approx(NAIL[2] - scene.protrusion)

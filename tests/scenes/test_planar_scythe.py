@@ -104,7 +104,7 @@ def test_invalid_parameters_are_rejected_with_a_reason():
 def test_footprints_and_snapshot():
     scene = PlanarScytheScene()
     scene.reset({"grass_position": GRASS}, np.random.default_rng(0))
-    np.testing.assert_allclose(scene.footprints(), [[1.0, 0.5, 0.2, 0.2, 0.0]])
+    np.testing.assert_allclose(scene.footprints({"grass_position": GRASS}), [[1.0, 0.5, 0.2, 0.2, 0.0]])
     snapshot = scene.snapshot()
     assert snapshot["stalks"].shape == (scene.stalk_count, 3) and not snapshot["cut"].any()
     scene.step(ToolPose(np.array([0.0, 0.0, 0.05]), np.eye(3)))

@@ -123,7 +123,7 @@ def test_a_spade_running_into_the_goal_box_shoves_it_instead_of_passing_through(
     run(scene, tool_poses(head, head + np.array([0.0, 0.0, 0.4])))
     box_x = scene.snapshot()["walls"][2, 0, 0] + 0.01 + scene.goal_half_width  # current box centre
     assert box_x > PARAMS["goal_position"][0] + 0.25
-    assert scene.footprints()[1, 0] == PARAMS["goal_position"][0]  # footprints: where it stood at reset
+    assert scene.footprints(PARAMS)[1, 0] == PARAMS["goal_position"][0]  # footprints: where it stood at reset
 
 
 def test_same_seed_same_result_and_instances_differ_only_by_jitter():
@@ -171,7 +171,7 @@ def test_invalid_parameters_are_rejected_with_a_reason():
 def test_footprints_and_snapshot():
     scene = PlanarSpadeScene()
     scene.reset(PARAMS, np.random.default_rng(0))
-    footprints = scene.footprints()
+    footprints = scene.footprints(PARAMS)
     assert footprints.shape == (2, 5)
     np.testing.assert_allclose(footprints[:, 0], [0.0, 0.8])
     snapshot = scene.snapshot()

@@ -161,7 +161,7 @@ def test_invalid_parameters_are_rejected_with_a_reason():
 
 def test_footprint_and_snapshot():
     scene = fresh()
-    np.testing.assert_allclose(scene.footprints(), [[0.5, 0.2, 0.15, 0.15, 0.0]])
+    np.testing.assert_allclose(scene.footprints({"nail_position": NAIL}), [[0.5, 0.2, 0.15, 0.15, 0.0]])
     snap = scene.snapshot()
     assert np.isnan(snap["tool_position"]).all()
     assert snap["board_center"][2] * 2 == pytest.approx(NAIL[2] - 0.06)

@@ -169,7 +169,7 @@ def test_same_seed_gives_the_same_instances_and_other_seeds_differ() -> None:
 
 
 def test_footprints_and_snapshot_describe_instance_zero(scooped: SpatialSpadeScene) -> None:
-    footprints = scooped.footprints()
+    footprints = scooped.footprints(PARAMS)
     assert footprints.shape == (2, 5)
     np.testing.assert_allclose(footprints[0], [1.0, -0.5, 0.21, 0.21, 2.2])
     np.testing.assert_allclose(footprints[1], [0.2, 0.3, 0.26, 0.26, 0.0])

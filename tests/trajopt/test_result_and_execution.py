@@ -9,7 +9,8 @@ import pytest
 
 from toolimit.scenes.base import ParameterSpec
 from toolimit.tools import ToolPose
-from toolimit.trajopt import SqpOptions, TrackOptions, TrajectoryResult, execute_in_scene, execute_tool_poses, track
+from toolimit.scenes import replay
+from toolimit.trajopt import SqpOptions, TrackOptions, TrajectoryResult, execute_in_scene, track
 from toolimit.trajopt.execution import resample_joints
 from trajopt_helpers import FPS, reachable_path, targets_of
 
@@ -81,7 +82,7 @@ class RecordingScene:
     def goal_reward(self):
         return self.low.copy()
 
-    def footprints(self):
+    def footprints(self, params):
         return self.footprint
 
 
@@ -94,8 +95,7 @@ def test_robot_replay_steps_the_scene_with_forward_kinematics(planar3, planar_re
     expected = planar3.tool_poses(result.q, result.base)
     np.testing.assert_allclose([p.position for p in scene.poses], expected[0])
     np.testing.assert_allclose(rewards, np.sum(expected[0][:, 2] < 0.4))
-    tool_only = execute_tool_poses(scene, {"box": np.zeros(3)}, np.random.default_rng(0), targets.positions,
-                                   targets.rotations)
+    tool_only = replay(scene, {"box": np.zeros(3)}, np.random.default_rng(0), targets.poses)
     assert tool_only.shape == (1,) and tool_only[0] == np.sum(targets.positions[:, 2] < 0.4)
 
 
@@ -131,7 +131,7 @@ def test_replay_in_the_planar_hammer_scene():
     params = {"nail_position": np.array([targets.positions[-1, 0], 0.0, 0.1])}
     robot_reward = execute_in_scene(arm, exact, scene, params, np.random.default_rng(0), batch_size=2)
     positions, rotations = arm.tool_poses(path, base)
-    tool_reward = execute_tool_poses(scene, params, np.random.default_rng(0), positions, rotations, batch_size=2)
+    tool_reward = replay(scene, params, np.random.default_rng(0), ToolPose(positions, rotations), batch_size=2)
     assert robot_reward.shape == (2,)
     np.testing.assert_array_equal(robot_reward, tool_reward)
     on_board = {"nail_position": np.array([base[0], 0.0, 0.1])}

@@ -37,6 +37,7 @@ from toolimit.interrupts import Interrupted, interruptible, starting_processes
 from toolimit.progress import tqdm
 from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
+from toolimit.scenes.replay import replay
 from toolimit.tools import ToolPose
 
 SceneFactory = Callable[[], Scene]
@@ -193,21 +194,14 @@ class SampleEvaluator:
             return SampleOutcome(index, rejection=f"sampler: the tool head goes {depth:.3f} m below the ground")
         try:
             if self.config.screen_replays > 0:
-                screened = self._replay(sample, poses, rng, self.config.screen_replays)
+                screened = replay(self.scene, sample.params, rng, poses, self.config.screen_replays)
                 if not np.any(screened != 0.0):
                     return SampleOutcome(index, replay_rewards=screened)
-            rewards = self._replay(sample, poses, rng, self.config.replays)
+            rewards = replay(self.scene, sample.params, rng, poses, self.config.replays)
         except InvalidSceneParameters as error:
             return SampleOutcome(index, rejection=str(error))
         keep = sample if np.mean(rewards) != 0.0 else None
         return SampleOutcome(index, replay_rewards=rewards, sample=keep)
-
-    def _replay(self, sample: AlignmentSample, poses: ToolPose, rng: np.random.Generator, runs: int) -> np.ndarray:
-        """(runs,) final goal reward of ``runs`` instances that follow ``poses``."""
-        self.scene.reset(sample.params, rng, batch_size=runs)
-        for position, rotation in zip(poses.position, poses.rotation):
-            self.scene.step(ToolPose(position, rotation))
-        return np.asarray(self.scene.goal_reward(), dtype=float).reshape(runs)
 
     def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
         return [self.evaluate(index) for index in range(start, stop)]

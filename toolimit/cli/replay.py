@@ -128,7 +128,7 @@ def _params_from_poses(path: Path, specs) -> dict:
 def run(args: argparse.Namespace) -> int:
     from toolimit.artifacts import save_json
     from toolimit.scenes.registry import make_scene
-    from toolimit.tools import ToolPose
+    from toolimit.scenes.replay import replay
     from toolimit.trajopt import from_original_spade_tip, load_pose_targets
 
     _check_arguments(args)
@@ -144,10 +144,7 @@ def run(args: argparse.Namespace) -> int:
     if reason is not None:
         raise CliError(f"scene parameters: {reason}")
 
-    scene.reset(params, np.random.default_rng(args.seed), batch_size=args.replays)
-    for position, rotation in zip(targets.positions, targets.rotations):
-        scene.step(ToolPose(position, rotation))
-    rewards = np.asarray(scene.goal_reward(), dtype=float)
+    rewards = replay(scene, params, np.random.default_rng(args.seed), targets.poses, args.replays)
     success = np.asarray(scene.is_success(), dtype=bool)
     print(f"toolimit replay: {args.tool} {args.world}, {len(targets.positions)} frames x {args.replays} replays: "
           f"goal reward mean {rewards.mean():.2f} (min {rewards.min():g}, max {rewards.max():g}), "
@@ -163,6 +160,6 @@ def run(args: argparse.Namespace) -> int:
     if args.html is not None:
         from toolimit.viz.meshcat_views import scene_replay_html
 
-        poses = ToolPose(targets.positions, targets.rotations)
-        scene_replay_html(args.html, make_scene(args.tool, args.world), poses, params, np.random.default_rng(args.seed))
+        scene_replay_html(args.html, make_scene(args.tool, args.world), targets.poses, params,
+                          np.random.default_rng(args.seed))
     return 0

@@ -3,6 +3,7 @@
 from toolimit.errors import InvalidSceneParameters
 from toolimit.scenes.base import CONTROL_FPS, ParameterSpec, Scene, SceneParams
 from toolimit.scenes.registry import available_scenes, make_scene, register_scene
+from toolimit.scenes.replay import replay
 
 __all__ = [
     "CONTROL_FPS",
@@ -13,4 +14,5 @@ __all__ = [
     "available_scenes",
     "make_scene",
     "register_scene",
+    "replay",
 ]

@@ -110,12 +110,13 @@ class Scene(Protocol):
     def is_success(self) -> np.ndarray:
         """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
 
-    def footprints(self) -> np.ndarray:
-        """(M, 5) ground rectangles occupied by scene elements of instance 0, world x-y plane:
+    def footprints(self, params: SceneParams) -> np.ndarray:
+        """(M, 5) ground rectangles the scene elements of ``params`` stand on, world x-y plane:
         centre x, centre y (m), half-length along the element's own x, half-width (m), yaw (rad).
 
-        A robot base must not stand inside one. Planar x-z scenes give a large half-width (their
-        elements span the y axis).
+        A pure function of valid ``params`` (no reset needed; elements that move later are where
+        they start). A robot base must not stand inside one. Planar x-z scenes give a large
+        half-width (their elements span the y axis).
         """
 
     def snapshot(self) -> dict[str, np.ndarray]:

@@ -6,7 +6,7 @@
 cost, :mod:`.sqp` for the solver and :mod:`.track` for the multi-start.
 """
 
-from toolimit.trajopt.execution import execute_in_scene, execute_tool_poses
+from toolimit.trajopt.execution import execute_in_scene
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
 from toolimit.trajopt.reachability import reachable_steps
 from toolimit.trajopt.result import TrajectoryResult
@@ -18,6 +18,6 @@ from toolimit.trajopt.track import TrackOptions, base_guesses, track
 __all__ = [
     "PoseTargets", "SqpOptions", "SqpOutcome", "TIME_SCALE_GRID", "TrackOptions", "TrackingProblem",
     "TrackingWeights", "TrajectoryResult", "base_guesses", "choose_time_scale", "execute_in_scene",
-    "execute_tool_poses", "from_original_spade_tip", "load_pose_targets", "reachable_steps", "solve_sqp",
+    "from_original_spade_tip", "load_pose_targets", "reachable_steps", "solve_sqp",
     "targets_from_alignment", "track",
 ]

@@ -1,9 +1,10 @@
-"""Replaying trajectories in a scene: the tool's target poses alone, or a robot's joint trajectory.
+"""Replaying a robot's joint trajectory in a scene.
 
 Robot replay puts the tool where forward kinematics puts it, so comparing
-``execute_tool_poses(scene, ..., targets)`` with ``execute_in_scene(robot, result, scene, ...)``
-shows what the robot's tracking errors cost in goal reward. The joint trajectory is resampled
-(linearly in joint space) at the scene's ``control_dt`` when its own ``dt`` differs (time scale).
+``replay(scene, params, rng, targets)`` (the tool alone) with ``execute_in_scene(robot, result,
+scene, ...)`` shows what the robot's tracking errors cost in goal reward. The joint trajectory is
+resampled (linearly in joint space) at the scene's ``control_dt`` when its own ``dt`` differs (time
+scale).
 """
 
 from __future__ import annotations
@@ -13,19 +14,10 @@ import numpy as np
 from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.robots import RobotModel
 from toolimit.scenes.base import Scene, SceneParams
+from toolimit.scenes.replay import replay
 from toolimit.tools import ToolPose
 from toolimit.trajopt.result import TrajectoryResult
 from toolimit.trajopt.track import base_in_footprints
-
-
-def execute_tool_poses(scene: Scene, params: SceneParams, rng: np.random.Generator, positions: np.ndarray,
-                       rotations: np.ndarray, batch_size: int = 1) -> np.ndarray:
-    """Reset ``scene`` with ``params`` (B instances), step the tool through positions (T, 3) and
-    rotations (T, 3, 3) (world frame), return the final goal reward (B,)."""
-    scene.reset(params, rng, batch_size)
-    for position, rotation in zip(positions, rotations):
-        scene.step(ToolPose(position, rotation))
-    return np.asarray(scene.goal_reward(), dtype=float)
 
 
 def resample_joints(q: np.ndarray, dt: float, control_dt: float) -> np.ndarray:
@@ -42,13 +34,12 @@ def execute_in_scene(robot: RobotModel, trajectory: TrajectoryResult, scene: Sce
     """Replay the robot's joint trajectory in ``scene`` (tool pose by forward kinematics at
     ``trajectory.base``); returns the goal reward (B,).
 
-    Raises ValueError if the trajectory is not this robot's or if the base (x, y) stands inside a
-    scene element's footprint (``scene.footprints()``).
+    Raises InputError if the trajectory is not this robot's, BaseInsideFootprint if the base (x, y)
+    stands inside a scene element's footprint (``scene.footprints(params)``).
     """
     if tuple(trajectory.joint_names) != tuple(robot.joint_names):
         raise InputError(f"trajectory joints {trajectory.joint_names} are not robot {robot.name}'s {robot.joint_names}")
-    scene.reset(params, rng, batch_size)
-    footprints = np.asarray(scene.footprints(), dtype=float).reshape(-1, 5)
+    footprints = np.asarray(scene.footprints(params), dtype=float).reshape(-1, 5)
     hit = base_in_footprints(trajectory.base, footprints)
     if hit is not None:
         x, y = trajectory.base[:2]
@@ -59,4 +50,4 @@ def execute_in_scene(robot: RobotModel, trajectory: TrajectoryResult, scene: Sce
         )
     q = resample_joints(trajectory.q, trajectory.dt, scene.control_dt)
     positions, rotations = robot.tool_poses(q, trajectory.base)
-    return execute_tool_poses(scene, params, rng, positions, rotations, batch_size)
+    return replay(scene, params, rng, ToolPose(positions, rotations), batch_size)

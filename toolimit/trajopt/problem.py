@@ -20,6 +20,7 @@ import pinocchio as pin
 
 from toolimit.errors import InputError
 from toolimit.robots import RobotModel
+from toolimit.tools import ToolPose
 
 
 @dataclass(frozen=True)
@@ -88,6 +89,11 @@ class PoseTargets:
     def horizon(self) -> int:
         """T, the number of target poses."""
         return len(self.positions)
+
+    @property
+    def poses(self) -> ToolPose:
+        """The targets as tool poses (T, 3) and (T, 3, 3), world frame (what a scene replays)."""
+        return ToolPose(self.positions, self.rotations)
 
     @classmethod
     def from_quaternions(cls, positions: np.ndarray, quaternions_wxyz: np.ndarray, fps: float) -> "PoseTargets":

@@ -135,8 +135,7 @@ def select_by_robot_execution(
     trajectories, rewards, refusals = [], [], []
     for k, candidate in enumerate(tqdm(candidates, desc="robot execution", unit="candidate", disable=not progress)):
         rng = np.random.default_rng([seed, k])
-        scene.reset(candidate.params, rng)
-        candidate_options = replace(options, footprints=scene.footprints())
+        candidate_options = replace(options, footprints=scene.footprints(candidate.params))
         try:  # refused where every base the solver finds, or the one it keeps, stands in an element
             trajectory = solve(robot, candidate.targets, candidate_options, rng)
             reward = float(np.mean(execute_in_scene(robot, trajectory, scene, candidate.params, rng, replays)))

@@ -34,6 +34,7 @@ from pinocchio.visualize.meshcat_visualizer import applyScalingOnHomegeneousTran
 
 from toolimit.artifacts import atomic_path
 from toolimit.scenes.base import CONTROL_FPS, Scene, SceneParams
+from toolimit.scenes.replay import replay
 from toolimit.scenes.spatial.tool_geometry import tool_shapes
 from toolimit.tools import ToolPose
 from toolimit.viz.world_elements import Element, placement, world_elements
@@ -292,11 +293,8 @@ def replay_scene(
         raise ValueError(
             f"poses must be (T, 3) positions and (T, 3, 3) rotations, got {position.shape} and {rotation.shape}"
         )
-    scene.reset(params, rng, batch_size=1)
-    frames = []
-    for p, r in zip(position, rotation):
-        scene.step(ToolPose(p, r))
-        frames.append(scene.snapshot())
+    frames: list[dict[str, np.ndarray]] = []
+    replay(scene, params, rng, ToolPose(position, rotation), on_step=lambda _, stepped: frames.append(stepped.snapshot()))
     return frames
 
 

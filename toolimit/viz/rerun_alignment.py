@@ -18,7 +18,7 @@ import rerun as rr
 from toolimit.align.search import AlignmentResult
 from toolimit.scenes.base import Scene
 from toolimit.scenes.registry import make_scene
-from toolimit.tools import ToolPose
+from toolimit.scenes.replay import replay
 from toolimit.viz.rerun_file import recording_file
 
 HEAD_COLOUR = (230, 120, 30)
@@ -79,15 +79,15 @@ def _log_alignment(recording: rr.RecordingStream, result: AlignmentResult, scene
                 f"scene/params/{name}", rr.Points3D([value], radii=0.03, colors=ELEMENT_COLOUR, labels=[name]), static=True
             )
     scene = scene or make_scene(result.tool, result.world)
-    rng = result.replay_generator(best, scene.parameters)
-    scene.reset(best.sample.params, rng, batch_size=1)
-    for frame, (position, rotation) in enumerate(zip(poses.position, poses.rotation)):
-        scene.step(ToolPose(position, rotation))
-        recording.set_time("time", duration=frame * scene.control_dt)
+    def log_step(frame: int, stepped: Scene) -> None:
+        position, rotation = poses.position[frame], poses.rotation[frame]
+        recording.set_time("time", duration=frame * stepped.control_dt)
         recording.log("replay/tool", rr.LineStrips3D([[demo.head[frame], demo.handle[frame]]], radii=0.01))
         recording.log("replay/tool_x", rr.Arrows3D(vectors=[0.1 * rotation[:, 0]], origins=[position]))
-        recording.log("replay/goal_reward", rr.Scalars(float(np.asarray(scene.goal_reward())[0])))
-        _log_snapshot(recording, scene.snapshot())
+        recording.log("replay/goal_reward", rr.Scalars(float(np.asarray(stepped.goal_reward())[0])))
+        _log_snapshot(recording, stepped.snapshot())
+
+    replay(scene, best.sample.params, result.replay_generator(best, scene.parameters), poses, on_step=log_step)
 
 
 def _log_snapshot(recording: rr.RecordingStream, snapshot: dict[str, np.ndarray]) -> None:

@@ -217,11 +217,11 @@ class PlanarHammerScene:
         return self._planted_at <= self.success_window + 1e-9
 
     # ----------------------------------------------------------------------------------- views
-    def footprints(self) -> np.ndarray:
+    def footprints(self, params: SceneParams) -> np.ndarray:
         """(1, 5) the board under the nail (x, y, half-length, half-width, yaw), m/rad; the planar
         world spans the y axis, so the half-width is large (10 m)."""
-        require_reset(self)
-        return np.array([[self.nail_start[0], 0.0, BOARD_HALF_LENGTH, 10.0, 0.0]])
+        nail_x = float(np.asarray(params["nail_position"], dtype=float)[0])
+        return np.array([[nail_x, 0.0, BOARD_HALF_LENGTH, 10.0, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``nail_top`` (3,) world head-top point, ``travel`` (), ``board`` (2, 3) the

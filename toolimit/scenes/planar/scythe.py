@@ -189,11 +189,11 @@ class PlanarScytheScene:
         return self._all_cut_at <= self.success_window + 1e-9
 
     # ----------------------------------------------------------------------------------- views
-    def footprints(self) -> np.ndarray:
+    def footprints(self, params: SceneParams) -> np.ndarray:
         """(1, 5) the grass patch's bounding square (x, y, half-length, half-width, yaw), m/rad."""
-        require_reset(self)
+        x, y = np.asarray(params["grass_position"], dtype=float)[:2]
         half = self.patch_diameter / 2.0
-        return np.array([[self.grass_centre[0], self.grass_centre[1], half, half, 0.0]])
+        return np.array([[x, y, half, half, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``stalks`` (M, 3) world foot points, ``cut`` (M,) bool, ``blade`` (2, 3) world

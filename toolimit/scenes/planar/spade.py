@@ -290,13 +290,13 @@ class PlanarSpadeScene:
         return self.success_tracker.is_success()
 
     # ----------------------------------------------------------------------------------- views
-    def footprints(self) -> np.ndarray:
+    def footprints(self, params: SceneParams) -> np.ndarray:
         """(2, 5) deposit and goal box rectangles (x, y, half-length, half-width, yaw), m/rad, where
         they stand at reset. The planar world spans the y axis, so the half-width is large (10 m)."""
-        require_reset(self)
+        sand_x, goal_x = (float(np.asarray(params[name], dtype=float)[0]) for name in ("sand_position", "goal_position"))
         return np.array([
-            [self.sand_x, 0.0, self.deposit_half_width + WALL_THICKNESS, 10.0, 0.0],
-            [self.goal_x, 0.0, self.goal_half_width + WALL_THICKNESS, 10.0, 0.0],
+            [sand_x, 0.0, self.deposit_half_width + WALL_THICKNESS, 10.0, 0.0],
+            [goal_x, 0.0, self.goal_half_width + WALL_THICKNESS, 10.0, 0.0],
         ])
 
     def snapshot(self) -> dict[str, np.ndarray]:

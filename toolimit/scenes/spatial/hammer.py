@@ -278,9 +278,9 @@ class SpatialHammerScene:
         return self.planted_time <= self.success_window + 1e-9
 
     # ---------------------------------------------------------------------------------- views
-    def footprints(self) -> np.ndarray:
+    def footprints(self, params: SceneParams) -> np.ndarray:
         """(1, 5) the board: centre x, y, half-length, half-width (m), yaw (rad)."""
-        x, y = self._nail_xy
+        x, y = np.asarray(params["nail_position"], dtype=float)[:2]
         return np.array([[x, y, self.board_half_size, self.board_half_size, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:

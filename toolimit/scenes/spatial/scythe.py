@@ -273,10 +273,11 @@ class SpatialScytheScene:
         return self.cut_time.max(axis=1) <= self.success_window + 1e-9
 
     # ---------------------------------------------------------------------------------- views
-    def footprints(self) -> np.ndarray:
+    def footprints(self, params: SceneParams) -> np.ndarray:
         """(1, 5) the patch: centre x, y, half-length, half-width (m), yaw (rad)."""
-        x, y = self.grass_position[:2]
-        return np.array([[x, y, self.patch_size[0] / 2, self.patch_size[1] / 2, self.grass_yaw]])
+        x, y = np.asarray(params["grass_position"], dtype=float)[:2]
+        yaw = float(np.asarray(params["grass_yaw"], dtype=float))
+        return np.array([[x, y, self.patch_size[0] / 2, self.patch_size[1] / 2, yaw]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0 for views.

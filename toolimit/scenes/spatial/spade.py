@@ -268,7 +268,8 @@ class SpatialSpadeScene:
         self._world: ParticleWorld | None = None
 
     # ------------------------------------------------------------------------------- parameters
-    def _footprints_of(self, params: SceneParams) -> np.ndarray:
+    def footprints(self, params: SceneParams) -> np.ndarray:
+        """(2, 5) ground rectangles (cx, cy, half_length, half_width, yaw): deposit, goal box."""
         sand, goal = np.asarray(params["sand_position"], float), np.asarray(params["goal_position"], float)
         deposit_half = DEPOSIT_INNER / 2 + WALL_THICKNESS
         goal_half = GOAL_INNER / 2 + WALL_THICKNESS
@@ -282,7 +283,7 @@ class SpatialSpadeScene:
         violation = parameter_violation(self.parameters, params)
         if violation is not None:
             return violation
-        deposit, goal = self._footprints_of(params)
+        deposit, goal = self.footprints(params)
         if _rectangles_overlap(deposit, goal):
             return "the sand deposit and the goal box overlap"
         return None
@@ -412,13 +413,6 @@ class SpatialSpadeScene:
         return self.success_tracker.is_success()
 
     # ------------------------------------------------------------------------------------- views
-    def footprints(self) -> np.ndarray:
-        """(2, 5) ground rectangles (cx, cy, half_length, half_width, yaw): deposit, goal box."""
-        self._require_reset()
-        return self._footprints_of(
-            {"sand_position": self.sand_position, "sand_yaw": self.sand_yaw, "goal_position": self.goal_position}
-        )
-
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``sphere_positions`` (N, 3) m, ``sphere_radius`` (), ``wall_centers`` (K, 3),
         ``wall_rotations`` (K, 3, 3), ``wall_half_extents`` (K, 3) (deposit walls then goal walls),
