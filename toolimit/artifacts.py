@@ -51,10 +51,16 @@ def _to_json(value: Any) -> Any:
     raise TypeError(f"cannot write {type(value).__name__} to JSON")
 
 
+def json_text(data: Any) -> str:
+    """``data`` as indented JSON text ending in a newline (numpy arrays and scalars become lists and
+    numbers, paths strings)."""
+    return json.dumps(data, indent=2, default=_to_json) + "\n"
+
+
 def save_json(path: str | os.PathLike[str], data: Any) -> None:
-    """Write ``data`` as indented JSON (numpy arrays and scalars become lists and numbers)."""
+    """Write ``data`` as indented JSON (see :func:`json_text`)."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(data, indent=2, default=_to_json) + "\n")
+        tmp.write_text(json_text(data))
 
 
 def save_npz(path: str | os.PathLike[str], **arrays: Any) -> None:

@@ -95,6 +95,11 @@ def swing_rotation(axis: np.ndarray) -> np.ndarray:
     return rot
 
 
+def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
+    """``angle`` (rad) wrapped into [-pi, pi)."""
+    return (np.asarray(angle, dtype=float) + np.pi) % (2 * np.pi) - np.pi
+
+
 def rotation_z(angle: np.ndarray | float) -> np.ndarray:
     """(..., 3, 3) rotations by ``angle`` (rad) about z."""
     angle = np.asarray(angle, dtype=float)

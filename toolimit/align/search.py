@@ -61,17 +61,28 @@ class Candidate:
 
 
 @dataclass(frozen=True)
-class SampleOutcome:
-    """What happened to one sample: rejected (with the reason) or replayed (with its rewards)."""
+class Rejected:
+    """A sample the sampler or the scene refused; ``reason`` says why."""
 
     index: int
-    rejection: str | None = None
-    replay_rewards: np.ndarray | None = None
-    sample: AlignmentSample | None = None
+    reason: str
+
+
+@dataclass(frozen=True)
+class Unrewarded:
+    """A sample replayed without goal reward: ``replay_rewards`` (runs,) (the screening runs only, when
+    they earned nothing)."""
+
+    index: int
+    replay_rewards: np.ndarray
 
     @property
     def reward(self) -> float:
-        return 0.0 if self.replay_rewards is None else float(np.mean(self.replay_rewards))
+        return float(np.mean(self.replay_rewards))
+
+
+#: What happened to one sample.
+SampleOutcome = Rejected | Unrewarded | Candidate
 
 
 @dataclass
@@ -184,24 +195,24 @@ class SampleEvaluator:
         rng = np.random.default_rng([self.seed, index])
         sample = self.draw(rng)
         if sample is None:
-            return SampleOutcome(index, rejection="sampler: elements closer than the minimum distance")
+            return Rejected(index, "sampler: elements closer than the minimum distance")
         reason = self.scene.invalid_reason(sample.params)
         if reason is not None:
-            return SampleOutcome(index, rejection=reason)
+            return Rejected(index, reason)
         aligned, _, poses = apply_alignment_sample(self.demo, self.keypoints, sample)
         depth = -aligned.head[:, 2].min()
         if depth > self.config.ground_tolerance:
-            return SampleOutcome(index, rejection=f"sampler: the tool head goes {depth:.3f} m below the ground")
+            return Rejected(index, f"sampler: the tool head goes {depth:.3f} m below the ground")
         try:
             if self.config.screen_replays > 0:
                 screened = replay(self.scene, sample.params, rng, poses, self.config.screen_replays)
                 if not np.any(screened != 0.0):
-                    return SampleOutcome(index, replay_rewards=screened)
+                    return Unrewarded(index, screened)
             rewards = replay(self.scene, sample.params, rng, poses, self.config.replays)
         except InvalidSceneParameters as error:
-            return SampleOutcome(index, rejection=str(error))
-        keep = sample if np.mean(rewards) != 0.0 else None
-        return SampleOutcome(index, replay_rewards=rewards, sample=keep)
+            return Rejected(index, str(error))
+        reward = float(np.mean(rewards))
+        return Candidate(index, reward, rewards, sample) if reward != 0.0 else Unrewarded(index, rewards)
 
     def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
         return [self.evaluate(index) for index in range(start, stop)]
@@ -419,13 +430,12 @@ def _merge(result: AlignmentResult, outcomes: list[SampleOutcome]) -> bool:
     """Add a chunk's outcomes (in index order) to ``result``; True once it holds K candidates."""
     for outcome in outcomes:
         result.samples_tried = outcome.index + 1
-        if outcome.rejection is not None:
+        if isinstance(outcome, Rejected):
             result.samples_rejected += 1
-            reason = _NUMBER.sub("#", outcome.rejection)
+            reason = _NUMBER.sub("#", outcome.reason)
             result.rejection_reasons[reason] = result.rejection_reasons.get(reason, 0) + 1
-        elif outcome.sample is not None:
-            assert outcome.replay_rewards is not None
-            result.candidates.append(Candidate(outcome.index, outcome.reward, outcome.replay_rewards, outcome.sample))
+        elif isinstance(outcome, Candidate):
+            result.candidates.append(outcome)
             if result.samples_to_first_candidate is None:
                 result.samples_to_first_candidate = outcome.index + 1
             if len(result.candidates) >= result.config.candidates:

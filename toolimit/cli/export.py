@@ -23,6 +23,7 @@ from toolimit.deploy import (
 )
 from toolimit.deploy.export import DEFAULT_RATE_HZ, SUMMARY_JSON, TRAJECTORY_CSV
 from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
+from toolimit.trajopt.result import TRAJECTORY_NPZ
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -48,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     check_writable_folder(args.out, "--out")
     trajectory = load_trajectory(args.trajectory)
     plan = export_trajectory(trajectory, args.robot, args.out, rate=args.rate, subdivisions=args.subdivisions,
-                             source=str(args.trajectory / "trajectory.npz"))
+                             source=str(args.trajectory / TRAJECTORY_NPZ))
     ratios = ", ".join(f"{check.quantity} {check.ratio:.2f}" for check in plan.checks if check.quantity != "position")
     duration, optimised = plan.path.duration, plan.optimised_duration
     print(f"retimed within {args.robot}'s limits: {duration:.3f} s against {optimised:.3f} s optimised "

@@ -18,8 +18,6 @@ from toolimit.cli import (
     check_output_folder,
 )
 
-ALIGNED_DEMO_NPZ = "aligned_demo.npz"
-
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     from toolimit.robots import ROBOTS
@@ -78,6 +76,7 @@ def _time_scale(text: str) -> float | None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from toolimit.align.outputs import ALIGNED_DEMO_NPZ
     from toolimit.deploy import SUPPORTED_ROBOTS
     from toolimit.robots import ROBOTS, make_robot
     from toolimit.tools import TOOLS

@@ -4,16 +4,11 @@
 policy's rollout): it returns a :class:`RetimedPath` whose ``sample(rate)`` gives the commands.
 """
 
-from toolimit.deploy.export import (
-    ExportPlan,
-    JointTrajectory,
-    export_trajectory,
-    load_trajectory,
-    plan_export,
-)
+from toolimit.deploy.export import ExportPlan, export_trajectory, plan_export
 from toolimit.deploy.limits import SUPPORTED_ROBOTS, JointLimits, published_limits
 from toolimit.deploy.retime import RetimedPath, SampledTrajectory, retime
 from toolimit.errors import PathOutsideLimits
+from toolimit.trajopt.result import JointTrajectory, load_trajectory
 
 __all__ = [
     "SUPPORTED_ROBOTS",

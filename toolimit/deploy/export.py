@@ -44,57 +44,11 @@ from toolimit.deploy.retime import (
     retime,
 )
 from toolimit.errors import InputError
+from toolimit.trajopt.result import JointTrajectory
 
 TRAJECTORY_CSV = "joint_trajectory.csv"
 SUMMARY_JSON = "joint_trajectory.json"
 DEFAULT_RATE_HZ = 1000.0
-_VELOCITY_CONSISTENCY_TOL = 1e-6  # rad/s: |v - diff(q)/dt| allowed in trajectory.npz
-
-
-@dataclass(frozen=True)
-class JointTrajectory:
-    """A trajectory.npz: q (T+1, N) rad, v (T, N) rad/s, base (3,) (m, m, rad), joint names, dt s."""
-
-    q: np.ndarray
-    v: np.ndarray
-    base: np.ndarray
-    joint_names: tuple[str, ...]
-    dt: float
-
-
-def load_trajectory(directory: str | Path) -> JointTrajectory:
-    """Read and validate ``directory/trajectory.npz`` (errors name the file and the field)."""
-    path = Path(directory) / "trajectory.npz"
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file (expected the output of `toolimit trajopt`)")
-    with np.load(path, allow_pickle=False) as data:
-        missing = [key for key in ("q", "v", "base", "joint_names", "dt") if key not in data]
-        if missing:
-            raise InputError(f"{path}: missing field(s) {', '.join(missing)}")
-        q = np.asarray(data["q"], dtype=float)
-        v = np.asarray(data["v"], dtype=float)
-        base = np.asarray(data["base"], dtype=float)
-        joint_names = tuple(str(name) for name in np.atleast_1d(data["joint_names"]))
-        dt = float(data["dt"])
-    if q.ndim != 2 or len(q) < 2:
-        raise InputError(f"{path}: q must have shape (T+1, N) with T >= 1, got {q.shape}")
-    n_steps, n_joints = len(q) - 1, q.shape[1]
-    if v.shape != (n_steps, n_joints):
-        raise InputError(f"{path}: v must have shape {(n_steps, n_joints)} to match q {q.shape}, got {v.shape}")
-    if base.shape != (3,):
-        raise InputError(f"{path}: base must have shape (3,), got {base.shape}")
-    if len(joint_names) != n_joints:
-        raise InputError(f"{path}: joint_names has {len(joint_names)} names for {n_joints} joints in q")
-    if not (np.isfinite(dt) and dt > 0):
-        raise InputError(f"{path}: dt must be a positive number of seconds, got {dt}")
-    for name, array in (("q", q), ("v", v), ("base", base)):
-        if not np.all(np.isfinite(array)):
-            raise InputError(f"{path}: {name} contains non-finite values")
-    mismatch = np.abs(np.diff(q, axis=0) / dt - v)
-    if mismatch.max() > _VELOCITY_CONSISTENCY_TOL:
-        t, j = np.unravel_index(np.argmax(mismatch), mismatch.shape)
-        raise InputError(f"{path}: v[{t}, {j}] differs from (q[{t + 1}] - q[{t}]) / dt by {mismatch[t, j]:.3g} rad/s")
-    return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt)
 
 
 @dataclass(frozen=True)

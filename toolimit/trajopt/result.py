@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.artifacts import atomic_path
+from toolimit.artifacts import atomic_path, json_text
 from toolimit.errors import InputError
 
 TRAJECTORY_NPZ = "trajectory.npz"
@@ -25,6 +25,56 @@ TRAJECTORY_JSON = "trajectory.json"
 
 #: Median rotation error beyond which a result counts as tracking the tool upside down, rad.
 UPSIDE_DOWN_RAD = np.pi / 2
+#: |v - diff(q) / dt| allowed in trajectory.npz, rad/s.
+_VELOCITY_CONSISTENCY_TOL = 1e-6
+
+@dataclass(frozen=True)
+class JointTrajectory:
+    """A trajectory.npz: q (T+1, N) rad, v (T, N) rad/s, base (3,) (m, m, rad), joint names, dt s."""
+
+    q: np.ndarray
+    v: np.ndarray
+    base: np.ndarray
+    joint_names: tuple[str, ...]
+    dt: float
+
+
+def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
+    """Read and validate ``directory/trajectory.npz``, the one reader of that file (errors name the
+    file and the field)."""
+    path = Path(directory) / TRAJECTORY_NPZ
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file (expected the output of `toolimit trajopt`)")
+    with np.load(path, allow_pickle=False) as data:
+        missing = [key for key in ("q", "v", "base", "joint_names", "dt") if key not in data]
+        if missing:
+            raise InputError(f"{path}: missing field(s) {', '.join(missing)}")
+        q = np.asarray(data["q"], dtype=float)
+        v = np.asarray(data["v"], dtype=float)
+        base = np.asarray(data["base"], dtype=float)
+        joint_names = tuple(str(name) for name in np.atleast_1d(data["joint_names"]))
+        dt = float(data["dt"])
+    if q.ndim != 2 or len(q) < 2:
+        raise InputError(f"{path}: q must have shape (T+1, N) with T >= 1, got {q.shape}")
+    n_steps, n_joints = len(q) - 1, q.shape[1]
+    if v.shape != (n_steps, n_joints):
+        raise InputError(f"{path}: v must have shape {(n_steps, n_joints)} to match q {q.shape}, got {v.shape}")
+    if base.shape != (3,):
+        raise InputError(f"{path}: base must have shape (3,), got {base.shape}")
+    if len(joint_names) != n_joints:
+        raise InputError(f"{path}: joint_names has {len(joint_names)} names for {n_joints} joints in q")
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"{path}: dt must be a positive number of seconds, got {dt}")
+    for name, array in (("q", q), ("v", v), ("base", base)):
+        if not np.all(np.isfinite(array)):
+            raise InputError(f"{path}: {name} contains non-finite values")
+    mismatch = np.abs(np.diff(q, axis=0) / dt - v)
+    if mismatch.max() > _VELOCITY_CONSISTENCY_TOL:
+        t, j = np.unravel_index(np.argmax(mismatch), mismatch.shape)
+        raise InputError(f"{path}: v[{t}, {j}] differs from (q[{t + 1}] - q[{t}]) / dt by {mismatch[t, j]:.3g} rad/s")
+    return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt)
+
+
 
 @dataclass(frozen=True)
 class TrajectoryResult:
@@ -121,7 +171,7 @@ class TrajectoryResult:
             "limit_margin": self.limit_margin,
             "velocity_ratio": self.velocity_ratio,
         }
-        text = json.dumps(document, indent=2, default=_to_json) + "\n"
+        text = json_text(document)
         with atomic_path(directory / TRAJECTORY_NPZ) as npz_tmp, atomic_path(directory / TRAJECTORY_JSON) as json_tmp:
             with open(npz_tmp, "wb") as handle:
                 np.savez(handle, q=self.q, v=self.v, base=self.base, joint_names=np.array(self.joint_names),
@@ -132,23 +182,15 @@ class TrajectoryResult:
     @classmethod
     def load(cls, directory: str | os.PathLike[str]) -> "TrajectoryResult":
         """Read a result written by :meth:`save`; a clear error for a missing or malformed file."""
-        directory = Path(directory)
-        npz_path, json_path = directory / TRAJECTORY_NPZ, directory / TRAJECTORY_JSON
-        for path in (npz_path, json_path):
-            if not path.is_file():
-                raise FileNotFoundError(f"{path}: no such file (expected a trajopt output directory)")
-        with np.load(npz_path) as arrays:
-            missing = {"q", "v", "base", "joint_names", "dt"} - set(arrays.files)
-            if missing:
-                raise InputError(f"{npz_path}: missing keys {sorted(missing)}")
-            q, v, base = arrays["q"], arrays["v"], arrays["base"]
-            joint_names, dt = tuple(str(n) for n in arrays["joint_names"]), float(arrays["dt"])
-        if q.ndim != 2 or v.shape != (len(q) - 1, q.shape[1]) or base.shape != (3,) or len(joint_names) != q.shape[1]:
-            raise InputError(f"{npz_path}: inconsistent shapes q {q.shape}, v {v.shape}, base {base.shape}, "
-                             f"joint_names {len(joint_names)}")
+        arrays = load_trajectory(directory)
+        json_path = Path(directory) / TRAJECTORY_JSON
+        if not json_path.is_file():
+            raise FileNotFoundError(f"{json_path}: no such file (expected a trajopt output directory)")
+        q, v = arrays.q, arrays.v
         document = json.loads(json_path.read_text())
         return cls(
-            robot=document["robot"], tool=document["tool"], joint_names=joint_names, q=q, v=v, base=base, dt=dt,
+            robot=document["robot"], tool=document["tool"], joint_names=arrays.joint_names, q=q, v=v,
+            base=arrays.base, dt=arrays.dt,
             time_scale=float(document["time_scale"]),
             position_error=np.asarray(document["position_error"], dtype=float),
             rotation_error=np.asarray(document["rotation_error"], dtype=float),
@@ -160,11 +202,3 @@ class TrajectoryResult:
 
 def _stats(values: np.ndarray) -> dict[str, float]:
     return {"mean": float(np.mean(values)), "median": float(np.median(values)), "max": float(np.max(values))}
-
-
-def _to_json(value: Any) -> Any:
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"cannot write {type(value).__name__} to JSON")

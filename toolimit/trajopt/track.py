@@ -33,6 +33,7 @@ import pinocchio as pin
 from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.progress import tqdm
 from toolimit.robots import RobotModel
+from toolimit.tools import wrap_angle
 from toolimit.trajopt.initial_guess import ik_rollout
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
 from toolimit.trajopt.result import TrajectoryResult
@@ -117,7 +118,7 @@ def base_guesses(robot: RobotModel, targets: PoseTargets, count: int = 8, radius
     yaw = np.arctan2(towards[:, 1], towards[:, 0]) - np.arctan2(tip0[1], tip0[0]) + yaw_offsets
     if not robot.base_dofs[2]:
         yaw = np.zeros(count)
-    return np.column_stack([positions, (yaw + np.pi) % (2 * np.pi) - np.pi])
+    return np.column_stack([positions, wrap_angle(yaw)])
 
 
 def base_in_footprints(base: np.ndarray, footprints: np.ndarray | None) -> int | None:
@@ -150,7 +151,7 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
                                options.q_start)
     guesses = np.atleast_2d(np.asarray(guesses, dtype=float))
     variants = [targets, targets.rotated_about_tool_z(np.pi)] if robot.tool.roll_symmetric else [targets]
-    runs: list[tuple[float, int, int, str, SqpOutcome, TrackingProblem]] = []
+    runs: list[_Run] = []
     rejected = 0
     merged = 0
     start_costs: list[float | None] = []  # per (variant, initialisation, start); None: in a footprint
@@ -172,20 +173,21 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
                     rejected += inside
                     start_costs.append(None if inside else outcome.cost)
                     if not inside:
-                        runs.append((outcome.cost, variant_index, start_index, initialisation, outcome, problem))
+                        runs.append(_Run(variant_index, start_index, initialisation, outcome, problem))
     if not runs:
         raise BaseInsideFootprint(f"every one of the {rejected} solutions puts the robot base inside a scene element")
-    cost, variant_index, start_index, initialisation, best, problem = min(runs, key=lambda run: run[0])
+    run = min(runs, key=lambda run: run.outcome.cost)
+    best, problem = run.outcome, run.problem
     statistics = {
-        "cost": cost,
+        "cost": best.cost,
         "initial_cost": best.cost_history[0],
         "cost_terms": problem.cost_terms(best.base, best.q),
         "iterations": best.iterations,
         "qp_iterations": best.qp_iterations,
         "converged": best.converged,
-        "start_index": start_index,
-        "roll_variant": variant_index,
-        "initialisation": initialisation,
+        "start_index": run.start_index,
+        "roll_variant": run.variant_index,
+        "initialisation": run.initialisation,
         "start_costs": start_costs,
         "starts_rejected_in_footprints": rejected,
         "starts_merged": merged,
@@ -198,6 +200,17 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
     return evaluate_trajectory(robot, problem.targets, best.base, best.q, dt, options.time_scale, statistics)
 
 
+@dataclass(frozen=True)
+class _Run:
+    """One finished SQP run whose base stands outside every footprint: where it started and its outcome."""
+
+    variant_index: int  # 0: the targets, 1: turned by pi about the tool axis
+    start_index: int  # row of the base guesses
+    initialisation: str  # one of INITIALISATIONS
+    outcome: SqpOutcome
+    problem: TrackingProblem
+
+
 def _joins(finished: list[SqpOutcome], options: TrackOptions) -> Callable[[np.ndarray, np.ndarray], bool]:
     """A ``stop_early`` test: the run's base and joints came within ``options.merge_distance`` of a
     converged run (base x, y in m, yaw modulo 2 pi in rad, joints in rad), so it is in that run's
@@ -207,7 +220,7 @@ def _joins(finished: list[SqpOutcome], options: TrackOptions) -> Callable[[np.nd
         if options.merge_distance <= 0:
             return False
         for other in finished:
-            yaw_gap = abs((base[2] - other.base[2] + np.pi) % (2 * np.pi) - np.pi)
+            yaw_gap = abs(float(wrap_angle(base[2] - other.base[2])))
             gap = max(float(np.abs(base[:2] - other.base[:2]).max()), yaw_gap, float(np.abs(q - other.q).max()))
             if gap < options.merge_distance:
                 return True

@@ -13,6 +13,8 @@ from typing import Callable, Literal, Mapping
 
 import numpy as np
 
+from toolimit.tools import rotation_z
+
 #: Side of the square ground tile drawn under every world, m.
 GROUND_SIZE = 4.0
 
@@ -78,7 +80,7 @@ _FALLEN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 def _scythe_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     """Patch and stalks; cut stalks lie on the ground (straw coloured)."""
     center, yaw = snapshot["patch_center"], float(snapshot["patch_yaw"])
-    turn = np.array([[np.cos(yaw), -np.sin(yaw), 0.0], [np.sin(yaw), np.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+    turn = rotation_z(yaw)
     half = snapshot["stalk_half_extents"]
     patch_half = [*snapshot["patch_half_extents"], 0.001]
     elements = [
