@@ -8,7 +8,8 @@ the joint velocities ``v_1..v_T`` (rad/s); ``q_t = q_{t-1} + dt v_t`` with ``q_0
 with ``M`` the tool frame in the world, ``log6`` Pinocchio's (linear part first; the error in the
 tool's LOCAL frame) and ``W = diag(w_pos I3, w_rot I3)``. Joint position and velocity limits are
 hard constraints, so J equals the benchmark's objective (PROBLEM.md) whenever they hold.
-This module evaluates J and its Gauss-Newton linearisation; :mod:`toolimit.trajopt.sqp` solves.
+This module evaluates J and its Gauss-Newton linearisation; each term of J is defined once in
+:mod:`toolimit.trajopt.costs`, and :mod:`toolimit.trajopt.sqp` solves.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import pinocchio as pin
 
 from toolimit.errors import InputError
 from toolimit.robots import RobotModel
+from toolimit.trajopt.costs import CostTerm, Iterate, Point, PostureTerm, PoseTerm, VelocityTerm
 from toolimit.tools import ToolPose
 
 
@@ -168,6 +170,10 @@ class TrackingProblem:
         self._data = robot.full_model.createData()
         self._frame = robot.full_tool_frame_id
         self._targets_inverse = [pin.SE3(r, p).inverse() for p, r in zip(targets.positions, targets.rotations)]
+        #: The terms of J, in the order their values and models are summed.
+        self.terms: tuple[CostTerm, ...] = (
+            PoseTerm(), VelocityTerm(weights.velocity), PostureTerm(weights.posture, self.q_start),
+        )
 
     @property
     def horizon(self) -> int:
@@ -177,56 +183,47 @@ class TrackingProblem:
     def n_joints(self) -> int:
         return self.robot.n_joints
 
-    def velocities(self, q: np.ndarray) -> np.ndarray:
-        """(T, N) joint velocities (rad/s) of a trajectory q (T+1, N)."""
-        return np.diff(q, axis=0) / self.dt
-
     def pose_residuals(self, base: np.ndarray, q: np.ndarray) -> np.ndarray:
         """(T, 6) weighted pose residuals for base (3,) and trajectory q (T+1, N) (q_0 unused)."""
-        model, data, frame = self._model, self._data, self._frame
-        q_full = np.empty(3 + self.n_joints)
-        q_full[:3] = base
-        residuals = np.empty((self.horizon, 6))
-        for t in range(self.horizon):
-            q_full[3:] = q[t + 1]
-            pin.forwardKinematics(model, data, q_full)
-            placement = pin.updateFramePlacement(model, data, frame)
-            residuals[t] = pin.log6(self._targets_inverse[t] * placement).vector
-        return residuals * self._w
+        errors = [self._error(base, q[t], t, jacobians=False) for t in range(1, self.horizon + 1)]
+        return np.array([pin.log6(error).vector for error in errors]).reshape(self.horizon, 6) * self._w
 
     def linearise(self, base: np.ndarray, q: np.ndarray) -> Linearisation:
         """Residuals and Jacobians (see :class:`Linearisation`) at base (3,), trajectory (T+1, N)."""
-        model, data, frame = self._model, self._data, self._frame
-        local = pin.ReferenceFrame.LOCAL
-        q_full = np.empty(3 + self.n_joints)
-        q_full[:3] = base
-        residuals = np.empty((self.horizon, 6))
-        jacobians = np.empty((self.horizon, 6, 3 + self.n_joints))
-        for t in range(self.horizon):
-            q_full[3:] = q[t + 1]
-            pin.computeJointJacobians(model, data, q_full)
-            error = self._targets_inverse[t] * pin.updateFramePlacement(model, data, frame)
-            frame_jacobian = pin.getFrameJacobian(model, data, frame, local)
-            residuals[t] = pin.log6(error).vector
-            jacobians[t] = pin.Jlog6(error) @ frame_jacobian
-        return Linearisation(residuals * self._w, jacobians * self._w[None, :, None])
+        steps = [self.step_linearisation(base, q[t], t) for t in range(1, self.horizon + 1)]
+        return Linearisation(np.array([r for r, _ in steps]), np.array([j for _, j in steps]))
 
     def step_linearisation(self, base: np.ndarray, q_t: np.ndarray, t: int) -> tuple[np.ndarray, np.ndarray]:
         """Residual (6,) and Jacobian (6, 3 + N) of target t (1..T) at base (3,) and joints q_t (N,)."""
-        q_full = np.concatenate([base, q_t])
-        model, data, frame = self._model, self._data, self._frame
-        pin.computeJointJacobians(model, data, q_full)
-        error = self._targets_inverse[t - 1] * pin.updateFramePlacement(model, data, frame)
-        jacobian = pin.Jlog6(error) @ pin.getFrameJacobian(model, data, frame, pin.ReferenceFrame.LOCAL)
+        error = self._error(base, q_t, t, jacobians=True)
+        jacobian = pin.Jlog6(error) @ pin.getFrameJacobian(self._model, self._data, self._frame, pin.ReferenceFrame.LOCAL)
         return self._w * pin.log6(error).vector, self._w[:, None] * jacobian
 
+    def _error(self, base: np.ndarray, q_t: np.ndarray, t: int, jacobians: bool) -> pin.SE3:
+        """P_t^-1 M(base, q_t), the tool frame relative to target t (1..T); with ``jacobians`` the
+        joint Jacobians are computed too (for ``getFrameJacobian``)."""
+        q_full = np.concatenate([base, q_t])
+        if jacobians:
+            pin.computeJointJacobians(self._model, self._data, q_full)
+        else:
+            pin.forwardKinematics(self._model, self._data, q_full)
+        return self._targets_inverse[t - 1] * pin.updateFramePlacement(self._model, self._data, self._frame)
+
+    def point(self, base: np.ndarray, q: np.ndarray) -> Point:
+        """J's evaluation point at base (3,) and trajectory q (T+1, N)."""
+        return Point(base, q, self.dt, self.pose_residuals(base, q))
+
+    def iterate(self, base: np.ndarray, q: np.ndarray, base_columns: np.ndarray) -> Iterate:
+        """The SQP's linearisation point, with Jacobians in the active base coordinates ``base_columns``."""
+        lin = self.linearise(base, q)
+        return Iterate(base, q, self.dt, lin.residuals, lin.jacobians[:, :, base_columns], lin.jacobians[:, :, 3:])
+
     def cost_terms(self, base: np.ndarray, q: np.ndarray) -> dict[str, float]:
-        """J's terms ``pose``, ``velocity``, ``posture`` and their sum ``total`` for base (3,),
+        """J's terms (``pose``, ``velocity``, ``posture``) and their sum ``total`` for base (3,),
         q (T+1, N)."""
-        pose = 0.5 * float(np.sum(self.pose_residuals(base, q) ** 2))
-        velocity = 0.5 * self.weights.velocity * float(np.sum(self.velocities(q) ** 2))
-        posture = 0.5 * self.weights.posture * float(np.sum((q[1:] - self.q_start) ** 2))
-        return {"pose": pose, "velocity": velocity, "posture": posture, "total": pose + velocity + posture}
+        at = self.point(base, q)
+        terms = {term.name: term.value(at) for term in self.terms}
+        return terms | {"total": sum(terms.values())}
 
     def cost(self, base: np.ndarray, q: np.ndarray) -> float:
         """J at base (3,) and trajectory q (T+1, N)."""

@@ -38,13 +38,14 @@ import contextlib
 import io
 import time
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Iterable
 
 import numpy as np
 import osqp
 import scipy.sparse as sp
 
 from toolimit.errors import InputError, SolverFailure
+from toolimit.trajopt.costs import Iterate, QuadraticModel
 from toolimit.trajopt.problem import TrackingProblem
 
 
@@ -183,23 +184,32 @@ class _TrackingQp:
         self.options = options
         self.solver: osqp.OSQP | None = None
 
-    def hessian_values(self, jac_base: np.ndarray, jac_arm: np.ndarray, damping: float) -> np.ndarray:
-        """CSC data of the upper-triangular Hessian (Gauss-Newton + velocity and posture terms +
-        damping)."""
-        w_v = self.problem.weights.velocity / self.problem.dt**2
-        base_block = np.einsum("tki,tkj->ij", jac_base, jac_base) + damping * np.eye(self.nb)
-        cross = np.einsum("tki,tkj->tij", jac_base, jac_arm)  # (T, nb, N)
-        arm = np.einsum("tki,tkj->tij", jac_arm, jac_arm)  # (T, N, N)
-        diagonal = np.full(self.horizon, 2.0 * w_v)
-        diagonal[-1] = w_v
-        arm[:, np.arange(self.n), np.arange(self.n)] += (diagonal + damping + self.problem.weights.posture)[:, None]
+    def hessian_values(self, models: list[QuadraticModel], damping: float) -> np.ndarray:
+        """CSC data of the upper-triangular Hessian: the terms' model blocks, summed in order, plus
+        the damping ``damping |x|^2 / 2``."""
+        base_block = _sum_blocks(m.hessian_base for m in models)
+        base_block = (np.zeros((self.nb, self.nb)) if base_block is None else base_block) + damping * np.eye(self.nb)
+        cross = _sum_blocks(m.hessian_cross for m in models)
+        arm = _sum_blocks(m.hessian_steps for m in models)
+        arm = np.zeros((self.horizon, self.n, self.n)) if arm is None else arm.copy()
+        diagonal = _sum_blocks(m.hessian_diagonal for m in models)
+        diagonal = np.zeros(self.horizon) if diagonal is None else diagonal
+        arm[:, np.arange(self.n), np.arange(self.n)] += (diagonal + damping)[:, None]
+        coupling = _sum_blocks(m.hessian_next for m in models)
         values = np.concatenate([
             base_block[self._base_tri].ravel(),
-            cross.ravel(),
+            (np.zeros((self.horizon, self.nb, self.n)) if cross is None else cross).ravel(),
             arm[:, self._tri[0], self._tri[1]].ravel(),
-            np.full(self.n * (self.horizon - 1), -w_v),
+            np.repeat(np.zeros(self.horizon - 1) if coupling is None else coupling, self.n),
         ])
         return values[self._p_order]
+
+    def gradient(self, models: list[QuadraticModel]) -> np.ndarray:
+        """The QP's linear term: the terms' model gradients, summed in order, (nb + T N,)."""
+        base = _sum_blocks(m.gradient_base for m in models)
+        steps = _sum_blocks(m.gradient_steps for m in models)
+        assert steps is not None, "every term has a gradient in the joint steps"
+        return np.concatenate([np.zeros(self.nb) if base is None else base, steps.ravel()])
 
     def solve(self, hessian: np.ndarray, gradient: np.ndarray, lower: np.ndarray,
               upper: np.ndarray) -> tuple[np.ndarray, int]:
@@ -232,6 +242,15 @@ class _TrackingQp:
         return result.x, int(result.info.iter)
 
 
+def _sum_blocks(blocks: Iterable[np.ndarray | None]) -> np.ndarray | None:
+    """The sum of the given blocks in order (None stands for zero; None if all are)."""
+    total = None
+    for block in blocks:
+        if block is not None:
+            total = block if total is None else total + block
+    return total
+
+
 def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOptions = SqpOptions(),
               q_guess: np.ndarray | None = None,
               stop_early: Callable[[np.ndarray, np.ndarray], bool] | None = None) -> SqpOutcome:
@@ -244,23 +263,8 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
     ``converged``.
     """
     started = time.perf_counter()
-    robot = problem.robot
-    dt, horizon, n = problem.dt, problem.horizon, problem.n_joints
-    lower, upper, vlim = robot.lower, robot.upper, robot.velocity_limit
-    base = np.asarray(base_guess, dtype=float).copy()
-    if base.shape != (3,) or not np.all(np.isfinite(base)):
-        raise ValueError(f"base guess must be 3 finite numbers (x, y, yaw), got {base_guess}")
-    if q_guess is None:
-        q = np.tile(problem.q_start, (horizon + 1, 1))
-    else:
-        q = np.asarray(q_guess, dtype=float).copy()
-        if q.shape != (horizon + 1, n):
-            raise ValueError(f"q_guess must have shape ({horizon + 1}, {n}), got {q.shape}")
-        q[0] = problem.q_start
-        q = project_to_limits(q, dt, lower, upper, vlim)
-
-    qp = _TrackingQp(problem, robot.base_dofs, options)
-    w_v, w_p = problem.weights.velocity, problem.weights.posture
+    base, q = _start(problem, base_guess, q_guess)
+    qp = _TrackingQp(problem, problem.robot.base_dofs, options)
     damping = options.initial_damping
     cost = problem.cost(base, q)
     history = [cost]
@@ -268,62 +272,28 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
     converged = False
     stopped_early = False
     iteration = 0
-    lin = None
+    at: Iterate | None = None
     for iteration in range(1, options.max_iterations + 1):
-        if lin is None:
-            lin = problem.linearise(base, q)
-        jac_base = lin.jacobians[:, :, qp.base_columns]
-        jac_arm = lin.jacobians[:, :, 3:]
-        velocity = np.diff(q, axis=0) / dt  # (T, N)
-        next_velocity = np.vstack([velocity[1:], np.zeros((1, n))])
-        gradient = np.concatenate([
-            np.einsum("tki,tk->i", jac_base, lin.residuals),
-            (np.einsum("tki,tk->ti", jac_arm, lin.residuals) + w_v / dt * (velocity - next_velocity)
-             + w_p * (q[1:] - problem.q_start)).ravel(),
-        ])
-        bound_low = np.concatenate([(lower - q[1:]).ravel(), (-vlim - velocity).ravel()])
-        bound_up = np.concatenate([(upper - q[1:]).ravel(), (vlim - velocity).ravel()])
-        step, used = qp.solve(qp.hessian_values(jac_base, jac_arm, damping), gradient, bound_low, bound_up)
+        if at is None:
+            at = problem.iterate(base, q, qp.base_columns)
+        d_base, d_q, used = _qp_step(problem, qp, at, damping)
         qp_iterations += used
-
-        # decrease predicted by the undamped Gauss-Newton model
-        d_base, d_q = step[: qp.nb], step[qp.nb:].reshape(horizon, n)
-        d_residual = jac_base @ d_base + np.einsum("tki,ti->tk", jac_arm, d_q)
-        d_velocity = np.diff(np.vstack([np.zeros((1, n)), d_q]), axis=0) / dt
-        predicted = -(float(np.sum(lin.residuals * d_residual)) + 0.5 * float(np.sum(d_residual**2))
-                      + w_v * float(np.sum(velocity * d_velocity)) + 0.5 * w_v * float(np.sum(d_velocity**2))
-                      + w_p * float(np.sum((q[1:] - problem.q_start) * d_q)) + 0.5 * w_p * float(np.sum(d_q**2)))
+        predicted = _predicted_decrease(problem, at, d_base, d_q)
         if predicted <= options.relative_tolerance * cost:
             converged = True  # the model promises less than the tolerance
             break
-
-        accepted = False
-        length = 1.0
-        for _ in range(options.line_search_steps):
-            trial_base = base.copy()
-            trial_base[qp.base_columns] += length * d_base
-            trial_q = q.copy()
-            trial_q[1:] += length * d_q
-            trial_q = project_to_limits(trial_q, dt, lower, upper, vlim)
-            trial_cost = problem.cost(trial_base, trial_q)
-            if trial_cost <= cost - 1e-4 * length * predicted:
-                accepted = True
-                break
-            length *= 0.5
-        if not accepted:  # the model is poor this far out (or the QP inexact): shorter steps
+        trial = _line_search(problem, qp, base, q, cost, d_base, d_q, predicted, options)
+        if trial is None:  # the model is poor this far out (or the QP inexact): shorter steps
             damping *= 10.0
             if damping > options.max_damping:
                 converged = True  # no descent even along tiny steps: a stationary point
                 break
             continue
-        ratio = (cost - trial_cost) / predicted
-        if length == 1.0 and ratio > 0.75:
-            damping = max(damping / 3.0, 1e-9)
-        elif length < 1.0 or ratio < 0.25:
-            damping = max(damping * 4.0, 1e-6)
+        trial_base, trial_q, trial_cost, length = trial
+        damping = _adapted_damping(damping, length, (cost - trial_cost) / predicted)
         decrease = cost - trial_cost
         base, q, cost = trial_base, trial_q, trial_cost
-        lin = None
+        at = None
         history.append(cost)
         if decrease < options.relative_tolerance * cost:
             converged = True
@@ -336,3 +306,72 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
         stopped_early=stopped_early,
         wall_time_s=time.perf_counter() - started, cost_history=tuple(history),
     )
+
+
+def _start(problem: TrackingProblem, base_guess: np.ndarray, q_guess: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """The first iterate: base (3,) from the guess, q (T+1, N) from ``q_guess`` projected to the
+    limits (q[0] = q_start), or q_start held."""
+    robot, horizon, n = problem.robot, problem.horizon, problem.n_joints
+    base = np.asarray(base_guess, dtype=float).copy()
+    if base.shape != (3,) or not np.all(np.isfinite(base)):
+        raise ValueError(f"base guess must be 3 finite numbers (x, y, yaw), got {base_guess}")
+    if q_guess is None:
+        return base, np.tile(problem.q_start, (horizon + 1, 1))
+    q = np.asarray(q_guess, dtype=float).copy()
+    if q.shape != (horizon + 1, n):
+        raise ValueError(f"q_guess must have shape ({horizon + 1}, {n}), got {q.shape}")
+    q[0] = problem.q_start
+    return base, project_to_limits(q, problem.dt, robot.lower, robot.upper, robot.velocity_limit)
+
+
+def _qp_step(problem: TrackingProblem, qp: _TrackingQp, at: Iterate,
+             damping: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """The damped QP's step at ``at``: base step (nb,), joint-position steps (T, N), OSQP iterations.
+    The bounds keep q + dq within the joint limits and its velocities within theirs."""
+    robot = problem.robot
+    models = [term.model(at) for term in problem.terms]
+    velocity = at.velocity
+    bound_low = np.concatenate([(robot.lower - at.q[1:]).ravel(), (-robot.velocity_limit - velocity).ravel()])
+    bound_up = np.concatenate([(robot.upper - at.q[1:]).ravel(), (robot.velocity_limit - velocity).ravel()])
+    step, used = qp.solve(qp.hessian_values(models, damping), qp.gradient(models), bound_low, bound_up)
+    return step[: qp.nb], step[qp.nb:].reshape(problem.horizon, problem.n_joints), used
+
+
+def _predicted_decrease(problem: TrackingProblem, at: Iterate, d_base: np.ndarray, d_q: np.ndarray) -> float:
+    """J's decrease along the step predicted by the undamped model (the terms' parts in order)."""
+    change = 0.0
+    for term in problem.terms:
+        for part in term.model_change(at, d_base, d_q):
+            change += part
+    return -change
+
+
+def _line_search(problem: TrackingProblem, qp: _TrackingQp, base: np.ndarray, q: np.ndarray, cost: float,
+                 d_base: np.ndarray, d_q: np.ndarray, predicted: float,
+                 options: SqpOptions) -> tuple[np.ndarray, np.ndarray, float, float] | None:
+    """Backtracking on the true J from step length 1, halving: the first (base, q, J, length) with
+    sufficient decrease (Armijo, 1e-4 of the predicted one), the trajectory projected to the limits;
+    None when no length in ``options.line_search_steps`` gives one."""
+    robot = problem.robot
+    length = 1.0
+    for _ in range(options.line_search_steps):
+        trial_base = base.copy()
+        trial_base[qp.base_columns] += length * d_base
+        trial_q = q.copy()
+        trial_q[1:] += length * d_q
+        trial_q = project_to_limits(trial_q, problem.dt, robot.lower, robot.upper, robot.velocity_limit)
+        trial_cost = problem.cost(trial_base, trial_q)
+        if trial_cost <= cost - 1e-4 * length * predicted:
+            return trial_base, trial_q, trial_cost, length
+        length *= 0.5
+    return None
+
+
+def _adapted_damping(damping: float, length: float, ratio: float) -> float:
+    """Levenberg-Marquardt update of mu from the accepted step: a full step whose actual decrease
+    is above 3/4 of the predicted one lowers it; a shortened step or a ratio below 1/4 raises it."""
+    if length == 1.0 and ratio > 0.75:
+        return max(damping / 3.0, 1e-9)
+    if length < 1.0 or ratio < 0.25:
+        return max(damping * 4.0, 1e-6)
+    return damping

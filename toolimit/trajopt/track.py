@@ -24,7 +24,7 @@ the targets turned by pi about the tool axis; the better is kept.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -194,8 +194,7 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
         "wall_time_s": time.perf_counter() - started,
         "best_start_wall_time_s": best.wall_time_s,
         "time_scale": options.time_scale,
-        "weights": {"position": options.weights.position, "rotation": options.weights.rotation,
-                    "velocity": options.weights.velocity},
+        "weights": asdict(options.weights),
     }
     return evaluate_trajectory(robot, problem.targets, best.base, best.q, dt, options.time_scale, statistics)
 
