@@ -31,7 +31,8 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from toolimit.scenes import make_scene  # noqa: E402
-from toolimit.scenes.spatial.spade import SpatialSpadeScene, scripted_scoop  # noqa: E402
+from toolimit.scenes.spatial.scoop import scripted_scoop  # noqa: E402
+from toolimit.scenes.spatial.spade import SpatialSpadeScene  # noqa: E402
 from toolimit.tools import ToolPose, tool_poses  # noqa: E402
 from toolimit.trajopt import from_original_spade_tip, load_pose_targets  # noqa: E402
 

@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 from toolimit.cli import main
-from toolimit.scenes.spatial.spade import scripted_scoop
+from toolimit.scenes.spatial.scoop import scripted_scoop
 
 PARAMS = {"sand_position": [0.0, 0.0, 0.0], "sand_yaw": 0.0, "goal_position": [0.0, 0.9, 0.0]}
 SHARED = Path(os.environ.get("TOOLIMIT_SHARED", Path(__file__).resolve().parents[3] / "shared"))

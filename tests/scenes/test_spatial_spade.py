@@ -9,13 +9,13 @@ import pytest
 
 from toolimit.scenes import InvalidSceneParameters, Scene, make_scene
 from toolimit.scenes.spatial.particles import GranularMaterial
+from toolimit.scenes.spatial.scoop import scripted_scoop
 from toolimit.scenes.spatial.spade import (
     DEPOSIT_INNER,
     GOAL_INNER,
     MAX_SPHERES,
     WORLD_HALF_SIZE,
     SpatialSpadeScene,
-    scripted_scoop,
 )
 from toolimit.tools import ToolPose
 

@@ -42,6 +42,9 @@ from toolimit.tools import ToolPose
 
 SceneFactory = Callable[[], Scene]
 
+#: Seconds between checkpoint writes.
+CHECKPOINT_EVERY_S = 5.0
+
 
 @dataclass(frozen=True)
 class Candidate:
@@ -418,9 +421,6 @@ def _restore(result: AlignmentResult, state: dict[str, Any], evaluator: SampleEv
         result.candidates.append(Candidate(index, float(np.mean(rewards)), rewards, sample))
     return float(state["wall_time_s"])
 
-
-#: Seconds between checkpoint writes.
-CHECKPOINT_EVERY_S = 5.0
 
 #: Numbers in a rejection message, replaced by '#' so that reasons of one kind count together.
 _NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")

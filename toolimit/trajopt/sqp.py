@@ -182,7 +182,8 @@ class _TrackingQp:
         steps_block = sp.vstack([identity, difference], format="csc")
         self.A = sp.hstack([sp.csc_matrix((2 * n * horizon, nb)), steps_block], format="csc")
         self.options = options
-        self.solver: osqp.OSQP | None = None
+        self.solver: osqp.OSQP | None = None  # set up by the first solve
+        self._duals = np.zeros(self.A.shape[0])  # the last QP's multipliers (warm start)
 
     def hessian_values(self, models: list[QuadraticModel], damping: float) -> np.ndarray:
         """CSC data of the upper-triangular Hessian: the terms' model blocks, summed in order, plus

@@ -222,13 +222,14 @@ def _current_target_index(times: np.ndarray, dt: float, horizon: int) -> np.ndar
     return np.clip(np.rint(times / dt).astype(int), 1, horizon) - 1
 
 
-def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, frame_dt: float, dt: float,
-                   targets: tuple[np.ndarray, np.ndarray] | None, target_stride: int | None, triad_scale: float,
+def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, frame_dt: float, *,
+                   dt: float | None = None, targets: tuple[np.ndarray, np.ndarray] | None = None,
+                   target_stride: int | None = None, triad_scale: float = 0.1,
                    world_frames: Sequence[Mapping[str, np.ndarray]] | None = None) -> meshcat.Visualizer:
-    """The view shared by both public functions.
+    """The animated robot view of the trajectory and rollout pages.
 
     ``q_frames`` (F, N) joint positions (rad) of the F animation frames, ``frame_dt`` (s) apart;
-    ``dt`` (s) is the trajectory's own step, which maps frames to targets; ``targets`` the T target
+    ``dt`` (s, ``frame_dt`` when None) is the trajectory's own step, which maps frames to targets; ``targets`` the T target
     positions (T, 3) and rotations (T, 3, 3); ``world_frames`` F scene snapshots, or None for a
     plain ground. Every animated node is also placed at its first-frame placement, which meshcat
     shows before the animation starts and once it has finished.
@@ -268,7 +269,8 @@ def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, fr
             visualizer[f"{TARGETS}/{k}"].set_transform(placement(target_positions[k], target_rotations[k]))
         if len(target_positions) > 1:
             visualizer[TARGET_PATH].set_object(_line(target_positions, _TARGET_COLOUR))
-        indices = _current_target_index(np.arange(len(q_frames)) * frame_dt, dt, len(target_positions))
+        step = frame_dt if dt is None else dt
+        indices = _current_target_index(np.arange(len(q_frames)) * frame_dt, step, len(target_positions))
         current = [placement(target_positions[i], target_rotations[i]) for i in indices]
         visualizer[CURRENT_TARGET].set_object(mg.triad(1.5 * triad_scale))
         visualizer[CURRENT_TARGET].set_transform(current[0])
@@ -302,7 +304,8 @@ def trajectory_visualizer(robot: RobotModel, trajectory: TrajectoryResult,
     """
     q = _check_trajectory(robot, trajectory)
     arrays = None if targets is None else _target_arrays(targets, len(q) - 1)
-    return _animated_view(robot, q, trajectory.base, trajectory.dt, trajectory.dt, arrays, target_stride, triad_scale)
+    return _animated_view(robot, q, trajectory.base, trajectory.dt, targets=arrays, target_stride=target_stride,
+                          triad_scale=triad_scale)
 
 
 def trajectory_to_html(path: str | os.PathLike[str], robot: RobotModel, trajectory: TrajectoryResult,
@@ -329,6 +332,6 @@ def trajectory_in_scene_html(path: str | os.PathLike[str], robot: RobotModel, tr
     q_control = resample_joints(q, trajectory.dt, scene.control_dt)
     positions, rotations = robot.tool_poses(q_control, trajectory.base)
     frames = replay_scene(scene, ToolPose(positions, rotations), params, rng)
-    visualizer = _animated_view(robot, q_control, trajectory.base, scene.control_dt, trajectory.dt, arrays,
-                                target_stride, triad_scale, world_frames=frames)
+    visualizer = _animated_view(robot, q_control, trajectory.base, scene.control_dt, dt=trajectory.dt, targets=arrays,
+                                target_stride=target_stride, triad_scale=triad_scale, world_frames=frames)
     return save_html(visualizer, path)

@@ -88,5 +88,5 @@ def rollout_html(path: str | os.PathLike[str], task: LearningTask, rollout: Roll
     kept = np.unique(np.r_[np.arange(0, len(q), int(stride)), len(q) - 1])
     frames = [rollout.snapshots[i] for i in kept] if task.world == "3d" else None
     frame_dt = task.control_dt * int(stride)
-    visualizer = _animated_view(robot, q[kept], task.base, frame_dt, frame_dt, None, None, 0.1, world_frames=frames)
+    visualizer = _animated_view(robot, q[kept], task.base, frame_dt, world_frames=frames)
     return save_html(visualizer, path)

@@ -117,6 +117,14 @@ class PlanarHammerScene:
             ),
         )
         self.batch_size = 0
+        # The state of the B instances, built by reset.
+        self.nail_start = np.zeros(2)  # plane point (x, z) of the nail head's top at reset, m
+        self._spaces: list[pymunk.Space] = []
+        self._nails: list[pymunk.Body] = []
+        self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
+        self._tool_shapes: list[tuple[pymunk.Poly, pymunk.Segment]] = []
+        self._time = 0.0
+        self._planted_at = np.zeros(0)
 
     # ----------------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:

@@ -89,6 +89,14 @@ class PlanarScytheScene:
             ),
         )
         self.batch_size = 0
+        # The state of the B instances, built by reset.
+        self.grass_centre = np.zeros(2)  # patch centre, world x-y, m
+        self.stalks = np.zeros((0, self.stalk_count, 2))  # (B, M, 2) stalk positions, m
+        self.cut = np.zeros((0, self.stalk_count), dtype=bool)  # (B, M)
+        self._spaces: list[pymunk.Space] = []
+        self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
+        self._time = 0.0
+        self._all_cut_at = np.zeros(0)
 
     # ----------------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:

@@ -145,7 +145,19 @@ class PlanarSpadeScene:
                           description="centre of the open goal box on the ground (x used)", axes=(0,)),
         )
         self.batch_size = 0
+        # The state of the B instances, built by reset.
+        self.sand_x = self.goal_x = 0.0  # deposit and goal box centres at reset, m
         self._spaces: list[pymunk.Space] = []
+        self._sand_bodies: list[list[pymunk.Body]] = []
+        self._boxes: list[pymunk.Body] = []
+        self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
+        self._segments: list[list[pymunk.Segment]] = []
+        self._segment_points = np.zeros((0, 4, 2))
+        self._buffer = pymunk.batch.Buffer()
+        self._body_ids: list[np.ndarray] = []
+        self._sand = np.zeros((0, self.sand_count, 2))  # (B, N, 2) circle centres, plane x-z, m
+        self._box_x = np.zeros(0)  # (B,) goal box centres, m
+        self.success_tracker = SuccessTracker(0)
 
     # ----------------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
@@ -198,7 +210,7 @@ class PlanarSpadeScene:
             self._spaces.append(space)
         self.batch_size = batch_size
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
-        self._segments: list[list[pymunk.Segment]] = []
+        self._segments = []
         self._segment_points = np.zeros((batch_size, 4, 2))
         for space, body in zip(self._spaces, self._tool.bodies):
             segments = [pymunk.Segment(body, (0, 0), (0, 0), self.blade_radius) for _ in range(3)]

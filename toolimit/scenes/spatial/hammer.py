@@ -150,8 +150,15 @@ class SpatialHammerScene:
             ),
         )
         self.batch_size = 0
+        # The state of the B instances, built by reset.
         self._nail_xy = np.zeros(2)
         self._start_top = 0.0
+        self.nail_top = np.zeros(0)  # (B,) z of the head top, m
+        self.nail_speed = np.zeros(0)  # (B,) downward speed, m/s
+        self.time = 0.0  # s since the tool was placed
+        self.planted_time = np.zeros(0)  # (B,) s
+        self.tool_position: np.ndarray | None = None  # (B, 3) world, m; None until the first step
+        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
 
     # ----------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
@@ -169,12 +176,11 @@ class SpatialHammerScene:
         self._nail_xy = position[:2].copy()
         self._start_top = float(position[2])
         b = self.batch_size
-        self.nail_top = np.full(b, self._start_top)  # (B,) z of the head top, m
-        self.nail_speed = np.zeros(b)  # (B,) downward speed, m/s
-        self.time = 0.0  # s since the tool was placed
-        self.planted_time = np.full(b, np.inf)  # (B,) s
-        self.tool_position: np.ndarray | None = None  # (B, 3) world, m
-        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
+        self.nail_top = np.full(b, self._start_top)
+        self.nail_speed = np.zeros(b)
+        self.time = 0.0
+        self.planted_time = np.full(b, np.inf)
+        self.tool_position = self.tool_rotation = None
 
     # ---------------------------------------------------------------------------- geometry
     @property

@@ -161,6 +161,15 @@ class SpatialScytheScene:
             ),
         )
         self.batch_size = 0
+        # The state of the B instances, built by reset.
+        self.grass_position = np.zeros(3)  # patch centre, world, m
+        self.grass_yaw = 0.0  # rad
+        self.stalks_xy = np.zeros((0, self.n_stalks, 2))  # (B, N, 2) stalk positions on the ground, world x-y, m
+        self.cut = np.zeros((0, self.n_stalks), dtype=bool)  # (B, N)
+        self.cut_time = np.zeros((0, self.n_stalks))  # (B, N) s since the tool was placed
+        self.time = 0.0
+        self.tool_position: np.ndarray | None = None  # (B, 3) world, m; None until the first step
+        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
 
     # ----------------------------------------------------------------------------- parameters
     def invalid_reason(self, params: SceneParams) -> str | None:
@@ -178,11 +187,10 @@ class SpatialScytheScene:
         turn = rotation_z(self.grass_yaw)[:2, :2]
         #: (B, N, 2) stalk positions on the ground, world x-y, m.
         self.stalks_xy = self.grass_position[:2] + local @ turn.T
-        self.cut = np.zeros((b, self.n_stalks), dtype=bool)  # (B, N)
-        self.cut_time = np.full((b, self.n_stalks), np.inf)  # (B, N) s since the tool was placed
+        self.cut = np.zeros((b, self.n_stalks), dtype=bool)
+        self.cut_time = np.full((b, self.n_stalks), np.inf)
         self.time = 0.0
-        self.tool_position: np.ndarray | None = None  # (B, 3) world, m
-        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
+        self.tool_position = self.tool_rotation = None
 
     # -------------------------------------------------------------------------------- physics
     def step(self, tool_pose: ToolPose) -> None:

@@ -54,8 +54,8 @@ spheres in the box for at least half of the control steps so far.
 
 Parameters must keep the deposit and the box apart (their ground rectangles must not overlap) and
 inside the world bound ``WORLD_HALF_SIZE`` (5 m) in x and y; both stand on the ground (the z of
-their position parameters is ignored). :func:`scripted_scoop` makes a hand-written scoop-carry-tip
-spade motion for given parameters (tests, benchmarks, notebooks).
+their position parameters is ignored). :func:`toolimit.scenes.spatial.scoop.scripted_scoop` makes
+a hand-written scoop-carry-tip spade motion for given parameters (tests, benchmarks, notebooks).
 """
 
 from __future__ import annotations
@@ -183,42 +183,6 @@ def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
     return True
 
 
-def scripted_scoop(params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
-    """A hand-made scoop-carry-tip spade motion for a scene's parameters (tests, benchmarks, notebooks).
-
-    The spade enters the deposit through its open side with the blade nearly flat on the ground
-    (handle 12 degrees up), slides under the pile to 8 cm from the back wall, lifts 0.3 m while
-    tilting the tip up 10 degrees (sand rests against the back rim), carries the blade over the goal
-    box, then raises the handle to 80 degrees (beyond the 68-degree friction angle of the sand on
-    the blade) so the sand slides off the open tip, and holds.
-    Returns (T, 3) head positions and (T, 3, 3) rotations (world frame) at ``fps``.
-    """
-    sand = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
-    goal = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
-    yaw = float(params["sand_yaw"])
-    heading = rotation_z(yaw) @ np.array([0.0, 1.0, 0.0])  # horizontal direction from tip to handle
-    up = np.array([0.0, 0.0, 1.0])
-    blade_middle = SPADE_BLADE_LENGTH / 2
-    deg = np.pi / 180
-    keyframes = [  # time (s), head position (m), handle elevation (rad)
-        (0.0, sand + 0.45 * heading + 0.008 * up, 12 * deg),
-        (1.2, sand - 0.12 * heading + 0.008 * up, 12 * deg),
-        (1.7, sand - 0.05 * heading + 0.30 * up, -10 * deg),
-        (2.9, goal - blade_middle * heading + 0.30 * up, -10 * deg),
-        (3.5, goal - blade_middle * heading + 0.20 * up, 80 * deg),
-        (4.5, goal - blade_middle * heading + 0.20 * up, 80 * deg),
-    ]
-    key_times = np.array([k[0] for k in keyframes])
-    key_heads = np.array([k[1] for k in keyframes])
-    times = np.arange(0.0, key_times[-1] + 1e-9, 1.0 / fps)
-    heads = np.stack([np.interp(times, key_times, key_heads[:, a]) for a in range(3)], axis=-1)
-    elevation = np.interp(times, key_times, [k[2] for k in keyframes])
-    axis = np.cos(elevation)[:, None] * heading + np.sin(elevation)[:, None] * up  # tool z
-    face = -np.sin(elevation)[:, None] * heading + np.cos(elevation)[:, None] * up  # tool x, face normal
-    rotations = np.stack([face, np.cross(axis, face), axis], axis=-1)
-    return ToolPose(heads, rotations)
-
-
 class SpatialSpadeScene:
     """Batched 3D spade scene (see the module docstring).
 
@@ -265,6 +229,10 @@ class SpatialSpadeScene:
             ),
         )
         self.batch_size = 0
+        # The state of the B instances, built by reset.
+        self.sand_position, self.sand_yaw, self.goal_position = np.zeros(3), 0.0, np.zeros(3)  # m, rad, m
+        self.walls = StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
+        self.success_tracker = SuccessTracker(0)
         self._world: ParticleWorld | None = None
 
     # ------------------------------------------------------------------------------- parameters
