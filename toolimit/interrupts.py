@@ -92,7 +92,7 @@ def starting_processes() -> Iterator[None]:
         if previous is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a pending SIGINT is handled here
         held = _state.pop("held", None)
-        if held is not None and not _state["interrupted"]:
+        if isinstance(held, int) and not _state["interrupted"]:
             _state["interrupted"] = True
             raise Interrupted(held)
 

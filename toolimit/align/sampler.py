@@ -8,8 +8,8 @@ the transformed head path. Frames: world, metres, z up, ground at z = 0; angles 
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 import numpy as np
 from scipy.spatial.distance import pdist

@@ -14,10 +14,11 @@ import multiprocessing
 import re
 import signal
 import time
+from collections.abc import Callable, Generator, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -244,7 +245,7 @@ def _chunks(first: int, total: int, size: int) -> Iterator[tuple[int, int]]:
 
 def _outcomes_in_order(
     evaluator: SampleEvaluator, scene_factory: SceneFactory, config: AlignmentConfig, workers: int, first: int
-) -> Iterator[list[SampleOutcome]]:
+) -> Generator[list[SampleOutcome], None, None]:
     """Chunks of outcomes in index order from sample ``first``; the consumer stops when it has enough."""
     chunks = _chunks(first, config.samples, config.chunk_size)
     if workers == 1:

@@ -18,8 +18,9 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, check_output_folder
 from toolimit.cli.learn import add_learning_arguments, learning_config

@@ -36,7 +36,7 @@ BASE_CONTROL_BOX = 10.0  # metres (or radians) per node: wide enough never to be
 class TrackingNodeData(crocoddyl.ActionDataAbstract):
     """Crocoddyl's node data plus the node's own Pinocchio data (calc and calcDiff run per node)."""
 
-    def __init__(self, model: "TrackingNodeModel") -> None:
+    def __init__(self, model: TrackingNodeModel) -> None:
         crocoddyl.ActionDataAbstract.__init__(self, model)
         self.pinocchio = model.problem.model.createData()
         self.Fx = np.eye(model.state.nx)
@@ -105,7 +105,7 @@ class TrackingNodeModel(crocoddyl.ActionModelAbstract):
             data.Lu = self.control_weights * u
 
 
-def shooting_problem(problem: BaseTrackingProblem, x0: np.ndarray) -> "crocoddyl.ShootingProblem":
+def shooting_problem(problem: BaseTrackingProblem, x0: np.ndarray) -> crocoddyl.ShootingProblem:
     """The Crocoddyl shooting problem: T running nodes 0..T-1 and the terminal node T."""
     running = [TrackingNodeModel(problem, k) for k in range(problem.horizon)]
     terminal = TrackingNodeModel(problem, problem.horizon)

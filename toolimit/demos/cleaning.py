@@ -133,7 +133,7 @@ def _consistent_chain(
     def reachable(i: int, j: int) -> bool:
         dt = (j - i) / fps
         speed = max(np.linalg.norm(head[j] - head[i]), np.linalg.norm(handle[j] - handle[i])) / dt
-        return speed <= max_speed and _angle(axis[j], axis[i]) / dt <= max_axis_rate
+        return bool(speed <= max_speed and _angle(axis[j], axis[i]) / dt <= max_axis_rate)
 
     # Segments: maximal runs of candidate frames without a jump between consecutive ones.
     starts = [0] + [k + 1 for k in range(len(frames) - 1) if not reachable(frames[k], frames[k + 1])]

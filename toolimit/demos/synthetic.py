@@ -18,8 +18,8 @@ the noise use two independent child streams, so ``noise=False`` gives the noisy 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Callable
 
 import numpy as np
 

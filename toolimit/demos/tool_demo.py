@@ -78,7 +78,7 @@ class ToolDemo:
             and np.array_equal(self.handle, other.handle)
         )
 
-    __hash__ = None  # equality is by array value, so demos are not hashable
+    __hash__ = None  # type: ignore[assignment]  # equality is by array value, so demos are not hashable
 
     # --- derived quantities -------------------------------------------------------------------
     @property

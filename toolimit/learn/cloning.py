@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -95,7 +95,7 @@ def discounted_returns(rewards: np.ndarray, gamma: float) -> np.ndarray:
 
 def action_mean(policy: ActorCriticPolicy, observations: torch.Tensor) -> torch.Tensor:
     """(M, N) the mean of the policy's Gaussian for observations (M, D)."""
-    features = policy.extract_features(observations, policy.pi_features_extractor)
+    features = cast(torch.Tensor, policy.extract_features(observations, policy.pi_features_extractor))
     return policy.action_net(policy.mlp_extractor.forward_actor(features))
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
@@ -55,7 +55,8 @@ def evaluate(model: BaseAlgorithm, task: LearningTask, episodes: int = 20, deter
     returns = np.zeros(episodes)
     while True:
         action, _ = model.predict(observation, deterministic=deterministic)
-        observation, reward, done, infos = env.step(action)
+        stepped, reward, done, infos = env.step(action)
+        observation = cast(np.ndarray, stepped)
         returns += reward
         if done[0]:
             joints.append(np.array([info["terminal_joints"] for info in infos]))

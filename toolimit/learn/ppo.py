@@ -19,7 +19,7 @@ import json
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -107,11 +107,11 @@ class _StdFloor(BaseCallback):
         self._clamp()
 
     def _clamp(self) -> None:
-        policy = self.model.policy
-        if policy.log_std.requires_grad:
-            floor = np.log(STD_FLOOR / self.training_env.simulator.robot.velocity_limit)
+        log_std = cast(torch.Tensor, self.model.policy.log_std)
+        if log_std.requires_grad:
+            floor = np.log(STD_FLOOR / cast(BatchedTaskVecEnv, self.training_env).simulator.robot.velocity_limit)
             with torch.no_grad():
-                policy.log_std.copy_(torch.maximum(policy.log_std, torch.as_tensor(floor, dtype=torch.float32)))
+                log_std.copy_(torch.maximum(log_std, torch.as_tensor(floor, dtype=torch.float32)))
 
     def _on_step(self) -> bool:
         return True
@@ -127,7 +127,7 @@ class _Checkpoints(BaseCallback):
 
     def _on_rollout_start(self) -> None:
         if self.updates and self.updates % self.every == 0:
-            save_checkpoint(self.model, self.directory)
+            save_checkpoint(cast(PPO, self.model), self.directory)
         self.updates += 1
 
     def _on_step(self) -> bool:
@@ -164,7 +164,8 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
 
 def _numpy_global_state() -> list[Any]:
     """numpy's global random state (SB3 shuffles minibatches with it) as JSON values."""
-    name, keys, position, has_gauss, gauss = np.random.get_state()  # type: ignore[misc]
+    state = cast(tuple[str, np.ndarray, int, int, float], np.random.get_state())
+    name, keys, position, has_gauss, gauss = state
     return [name, keys.tolist(), int(position), int(has_gauss), float(gauss)]
 
 

@@ -87,7 +87,7 @@ class LearningTask:
         return path
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> "LearningTask":
+    def load(cls, path: str | os.PathLike[str]) -> LearningTask:
         """Read a task written by :meth:`save`; TaskFileError names a missing file, key or bad shape."""
         path = Path(path)
         if path.is_dir():

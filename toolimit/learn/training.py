@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -132,7 +133,7 @@ class _Curve(BaseCallback):
             return
         logged = self.model.logger.name_to_value
         record = self.pending | {
-            "action_std_mean": float(torch.exp(self.model.policy.log_std).mean()),
+            "action_std_mean": float(torch.exp(cast(torch.Tensor, self.model.policy.log_std)).mean()),
             "approx_kl": float(logged.get("train/approx_kl", float("nan"))),
         }
         with open(self.path, "a") as handle:

@@ -16,10 +16,12 @@ state is zero and PPO must not bootstrap past it (a finite-horizon task, as the 
 from __future__ import annotations
 
 import time
-from typing import Any, Sequence
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices
 
 from toolimit.learn.env import action_space, observation_space
 from toolimit.learn.simulator import TaskSimulator
@@ -43,7 +45,7 @@ class BatchedTaskVecEnv(VecEnv):
         super().__init__(num_envs, observation_space(self.simulator), action_space(self.simulator))
         self._rng = np.random.default_rng(seed)
         #: The generator's state just before the latest reset (a checkpoint restores it).
-        self.rng_state_at_reset: dict[str, Any] = self._rng.bit_generator.state
+        self.rng_state_at_reset: Mapping[str, Any] = self._rng.bit_generator.state
         self._actions = np.zeros((num_envs, self.simulator.n_joints))
         self._returns = np.zeros(num_envs)
         self._goal = np.zeros(num_envs)
@@ -97,18 +99,18 @@ class BatchedTaskVecEnv(VecEnv):
         pass
 
     # SB3's attribute access: every instance shares this object's attributes.
-    def _count(self, indices: None | int | Sequence[int]) -> int:
-        return len(self._get_indices(indices))
+    def _count(self, indices: VecEnvIndices) -> int:
+        return len(list(self._get_indices(indices)))
 
-    def get_attr(self, attr_name: str, indices: None | int | Sequence[int] = None) -> list[Any]:
+    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
         return [getattr(self, attr_name)] * self._count(indices)
 
-    def set_attr(self, attr_name: str, value: Any, indices: None | int | Sequence[int] = None) -> None:
+    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
         setattr(self, attr_name, value)
 
-    def env_method(self, method_name: str, *method_args: Any, indices: None | int | Sequence[int] = None,
+    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
                    **method_kwargs: Any) -> list[Any]:
         return [getattr(self, method_name)(*method_args, **method_kwargs)] * self._count(indices)
 
-    def env_is_wrapped(self, wrapper_class: type, indices: None | int | Sequence[int] = None) -> list[bool]:
+    def env_is_wrapped(self, wrapper_class: type, indices: VecEnvIndices = None) -> list[bool]:
         return [False] * self._count(indices)

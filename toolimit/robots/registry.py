@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import functools
-from typing import Callable
+from collections.abc import Callable
 
 import pinocchio as pin
 
@@ -43,7 +43,7 @@ def make_robot(
     return build_robot_model(_arm(name), tool_spec(tool), tool_placement, base_height)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _arm(name: str) -> ArmDescription:
     """The arm description, built once per process (loading a URDF takes up to a second);
     ``build_robot_model`` copies its Pinocchio model, so the cached one is never modified."""

@@ -75,7 +75,9 @@ class QuadraticModel:
 class CostTerm(Protocol):
     """One term of J."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """The term's key in ``TrackingProblem.cost_terms``."""
 
     def value(self, at: Point) -> float:
         """The term at ``at``."""

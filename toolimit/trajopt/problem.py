@@ -21,8 +21,8 @@ import pinocchio as pin
 
 from toolimit.errors import InputError
 from toolimit.robots import RobotModel
-from toolimit.trajopt.costs import CostTerm, Iterate, Point, PostureTerm, PoseTerm, VelocityTerm
 from toolimit.tools import ToolPose
+from toolimit.trajopt.costs import CostTerm, Iterate, Point, PoseTerm, PostureTerm, VelocityTerm
 
 
 @dataclass(frozen=True)
@@ -98,7 +98,7 @@ class PoseTargets:
         return ToolPose(self.positions, self.rotations)
 
     @classmethod
-    def from_quaternions(cls, positions: np.ndarray, quaternions_wxyz: np.ndarray, fps: float) -> "PoseTargets":
+    def from_quaternions(cls, positions: np.ndarray, quaternions_wxyz: np.ndarray, fps: float) -> PoseTargets:
         """Targets from positions (T, 3) and scalar-first quaternions (T, 4), normalised here."""
         quaternions_wxyz = np.asarray(quaternions_wxyz, dtype=float)
         positions = np.asarray(positions, dtype=float)
@@ -122,7 +122,7 @@ class PoseTargets:
         )
         return cls(positions, rotations, fps)
 
-    def rotated_about_tool_z(self, angle: float) -> "PoseTargets":
+    def rotated_about_tool_z(self, angle: float) -> PoseTargets:
         """The same targets with every tool frame turned by ``angle`` (rad) about its own z axis
         (an equivalent target set for a roll-symmetric tool when angle = pi)."""
         c, s = np.cos(angle), np.sin(angle)

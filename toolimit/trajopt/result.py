@@ -180,7 +180,7 @@ class TrajectoryResult:
         return directory
 
     @classmethod
-    def load(cls, directory: str | os.PathLike[str]) -> "TrajectoryResult":
+    def load(cls, directory: str | os.PathLike[str]) -> TrajectoryResult:
         """Read a result written by :meth:`save`; a clear error for a missing or malformed file."""
         arrays = load_trajectory(directory)
         json_path = Path(directory) / TRAJECTORY_JSON

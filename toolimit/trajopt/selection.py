@@ -10,9 +10,9 @@ wins (ties: the lower tracking cost J).
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -148,5 +148,6 @@ def select_by_robot_execution(
         refusals.append(refusal)
     robot_rewards = np.array(rewards)
     ranked = [k for k in range(len(candidates)) if robot_rewards[k] > 0]
-    best = min(ranked, key=lambda k: (-robot_rewards[k], trajectories[k].statistics["cost"]), default=None)
+    costs = [float("nan") if trajectory is None else trajectory.statistics["cost"] for trajectory in trajectories]
+    best = min(ranked, key=lambda k: (-robot_rewards[k], costs[k]), default=None)
     return RobotSelection(best, trajectories, robot_rewards, refusals)

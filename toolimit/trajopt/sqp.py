@@ -37,8 +37,8 @@ from __future__ import annotations
 import contextlib
 import io
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Callable, Iterable
 
 import numpy as np
 import osqp
@@ -167,8 +167,8 @@ class _TrackingQp:
         cols.append(step_index[:, tri_j].ravel())
         rows.append(step_index[:-1].ravel())
         cols.append(step_index[1:].ravel())
-        rows, cols = np.concatenate(rows), np.concatenate(cols)
-        order = sp.csc_matrix((np.arange(1, len(rows) + 1, dtype=float), (rows, cols)),
+        row_index, col_index = np.concatenate(rows), np.concatenate(cols)
+        order = sp.csc_matrix((np.arange(1, len(row_index) + 1, dtype=float), (row_index, col_index)),
                               shape=(self.n_variables, self.n_variables))
         self._p_pattern = order
         self._p_order = order.data.astype(np.int64) - 1  # csc position k holds COO entry _p_order[k]
@@ -274,7 +274,7 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
     stopped_early = False
     iteration = 0
     at: Iterate | None = None
-    for iteration in range(1, options.max_iterations + 1):
+    for iteration in range(1, options.max_iterations + 1):  # noqa: B007 (the count is read after the loop)
         if at is None:
             at = problem.iterate(base, q, qp.base_columns)
         d_base, d_q, used = _qp_step(problem, qp, at, damping)

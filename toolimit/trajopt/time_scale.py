@@ -44,6 +44,7 @@ def choose_time_scale(robot: RobotModel, targets: PoseTargets, options: TrackOpt
         if median < threshold:
             best = result
             break
+    assert best is not None  # the grid is not empty
     met = float(np.median(best.position_error)) < threshold
     best.statistics["time_scale_search"] = {"median_position_error_m": tried, "threshold_m": threshold,
                                             "threshold_met": met}

@@ -24,8 +24,8 @@ the targets turned by pi about the tool axis; the better is kept.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from typing import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -100,7 +100,7 @@ def base_guesses(robot: RobotModel, targets: PoseTargets, count: int = 8, radius
         raise ValueError("random base guesses beyond the ring need an rng")
     if not robot.base_dofs[1]:  # base moves along x only
         offsets = np.linspace(-radius, radius, ring) if ring > 1 else np.zeros(ring)
-        if extra:
+        if extra and rng is not None:  # (rng is given whenever extra > 0: checked above)
             offsets = np.concatenate([offsets, rng.uniform(-1.0, 1.0, extra)])
         guesses = np.zeros((count, 3))
         guesses[:, 0] = centre[0] + offsets
@@ -109,7 +109,7 @@ def base_guesses(robot: RobotModel, targets: PoseTargets, count: int = 8, radius
     angles = np.arctan2(-centre[1], -centre[0]) + 2 * np.pi * np.arange(ring) / max(ring, 1)
     radii = np.full(ring, radius)
     yaw_offsets = np.zeros(ring)
-    if extra:
+    if extra and rng is not None:
         angles = np.concatenate([angles, rng.uniform(-np.pi, np.pi, extra)])
         radii = np.concatenate([radii, rng.uniform(0.3, 1.0, extra)])
         yaw_offsets = np.concatenate([yaw_offsets, rng.uniform(-np.pi / 4, np.pi / 4, extra)])

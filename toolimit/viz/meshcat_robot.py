@@ -29,8 +29,8 @@ from __future__ import annotations
 
 import functools
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import coal
 import meshcat
@@ -110,7 +110,7 @@ def robot_visual(robot: RobotModel, base: np.ndarray) -> RobotVisual:
     return RobotVisual(robot.model, visual_geometry(robot), base_placement(robot, base))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _reduced_mesh_model(name: str, keep: tuple[str, ...]) -> tuple[pin.Model, pin.GeometryModel]:
     """example-robot-data's model and visual model with every joint not in ``keep`` locked at q0,
     a free-flyer at the origin (as :mod:`toolimit.robots.arms` builds the kinematic model).

@@ -17,9 +17,9 @@ World frame: metres, z up, ground z = 0. Frames of a replay are scene ``snapshot
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import meshcat
 import meshcat.geometry as mg
@@ -223,10 +223,11 @@ def replay_visualizer(
     tool_viz.display(np.zeros(0))  # shapes at their tool-frame placements under the "tool" node
 
     robot_viz = None
+    robot_frames = np.zeros((len(frames), 0))  # (F, nq) joint positions of the robot, rad
     if robot is not None:
-        robot_q = np.asarray(robot_q, dtype=float)
-        if robot_q.shape != (len(frames), robot.model.nq):
-            raise ValueError(f"robot_q must have shape ({len(frames)}, {robot.model.nq}), got {robot_q.shape}")
+        robot_frames = np.asarray(robot_q, dtype=float)
+        if robot_frames.shape != (len(frames), robot.model.nq):
+            raise ValueError(f"robot_q must have shape ({len(frames)}, {robot.model.nq}), got {robot_frames.shape}")
         robot_viz = load_geometry(visualizer, robot.model, robot.visual_model, ROBOT)
         visualizer[ROBOT].set_transform(np.asarray(robot.base_placement, dtype=float))
     if targets is not None:
@@ -241,7 +242,7 @@ def replay_visualizer(
     if placed:
         visualizer[TOOL].set_transform(placed[0])
     if robot_viz is not None:
-        set_robot_frame(visualizer, robot_viz, robot_q[0])
+        set_robot_frame(visualizer, robot_viz, robot_frames[0])
     animation = Animation(default_framerate=fps)
     for index, snapshot in enumerate(frames):
         with animation.at_frame(visualizer, index) as frame:
@@ -252,7 +253,7 @@ def replay_visualizer(
             if pose is not None:
                 frame[TOOL].set_transform(pose)
             if robot_viz is not None:
-                set_robot_frame(frame, robot_viz, robot_q[index])
+                set_robot_frame(frame, robot_viz, robot_frames[index])
     if not placed:
         visualizer[TOOL].set_property("visible", False)
     visualizer.set_animation(animation, play=True, repetitions=1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from typing import Iterator
+from collections.abc import Iterator
 
 import rerun as rr
 
@@ -19,7 +19,7 @@ def recording_file(path: str | os.PathLike[str], application_id: str) -> Iterato
     is written.
     """
     recording = rr.RecordingStream(application_id)
-    if not recording.is_enabled():
+    if not rr.is_enabled(recording):
         yield None
         return
     with atomic_path(path) as tmp:

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import os
 from collections import defaultdict
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import numpy as np
 import rerun as rr
@@ -27,7 +27,7 @@ from toolimit.viz.rerun_file import recording_file
 from toolimit.viz.world_elements import Element, world_elements
 
 
-def _rgba8(colour: Sequence[float]) -> list[int]:
+def _rgba8(colour: Sequence[float] | np.ndarray) -> list[int]:
     return [int(round(255 * c)) for c in colour]
 
 

@@ -8,8 +8,9 @@ the ``snapshot()`` keys of each 3D world (instance 0 of ``SpatialSpadeScene``,
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Callable, Literal, Mapping
+from typing import Literal
 
 import numpy as np
 

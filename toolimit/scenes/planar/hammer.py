@@ -44,7 +44,7 @@ from toolimit.scenes.base import (
     parameter_violation,
     require_reset,
 )
-from toolimit.scenes.planar.kinematic_tool import KinematicTool
+from toolimit.scenes.planar.kinematic_tool import KinematicTool, plane_point
 from toolimit.tools import ToolPose, tool_spec
 
 #: Nail positions above this height (m) are rejected.
@@ -107,7 +107,7 @@ class PlanarHammerScene:
         corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
         self._head_corners = corners  # (8, 3) tool frame, m
         self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
-        self.parameters = (
+        self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
                 "nail_position", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, self.protrusion),
                 (WORLD_HALF_SIZE, WORLD_HALF_SIZE, MAX_NAIL_HEIGHT), on_ground=False, unit="m",
@@ -159,7 +159,7 @@ class PlanarHammerScene:
     def _add_nail(self, space: pymunk.Space) -> pymunk.Body:
         """The nail body with its guide and friction joints; body origin = head top, plane m."""
         body = pymunk.Body(self.nail_mass, float("inf"))
-        body.position = tuple(self.nail_start)
+        body.position = plane_point(self.nail_start)
         w, t = self.nail_head_width / 2.0, self.nail_head_thickness
         shank_bottom = -(t + self.protrusion + SHANK_EMBEDDED)
         s = self.nail_shank_width / 2.0
@@ -185,8 +185,8 @@ class PlanarHammerScene:
         handle_local = self._tool.local_points(self._handle_points)
         identity = pymunk.Transform.identity()
         for b, (head, handle) in enumerate(self._tool_shapes):
-            head.unsafe_set_vertices([tuple(map(float, p)) for p in head_local[b]], identity)
-            handle.unsafe_set_endpoints(tuple(map(float, handle_local[b, 0])), tuple(map(float, handle_local[b, 1])))
+            head.unsafe_set_vertices([plane_point(p) for p in head_local[b]], identity)
+            handle.unsafe_set_endpoints(plane_point(handle_local[b, 0]), plane_point(handle_local[b, 1]))
             if first:  # the hammer enters the world only now, at its first pose
                 self._spaces[b].add(head, handle)
         dt = self.control_dt / self.substeps

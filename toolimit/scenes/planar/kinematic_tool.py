@@ -42,6 +42,11 @@ def to_plane(points: np.ndarray, plane: Plane) -> np.ndarray:
     return np.asarray(points, dtype=float)[..., list(PLANE_AXES[plane])]
 
 
+def plane_point(point: np.ndarray) -> tuple[float, float]:
+    """A (2,) plane point or vector as the pair of floats pymunk takes."""
+    return float(point[0]), float(point[1])
+
+
 def _wrap_angle(angle: np.ndarray) -> np.ndarray:
     """Angles (rad) wrapped to [-pi, pi)."""
     return (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi
@@ -109,14 +114,14 @@ class KinematicTool:
             angular_velocity = np.zeros_like(target_angle)
             self.position, self.angle = target_position, target_angle
             for body, p, a in zip(self.bodies, target_position, target_angle):
-                body.position = (float(p[0]), float(p[1]))
+                body.position = plane_point(p)
                 body.angle = float(a)
             self.placed = True
         else:
             velocity = (target_position - self.position) / control_dt
             angular_velocity = _wrap_angle(target_angle - self.angle) / control_dt
         for body, v, w in zip(self.bodies, velocity, angular_velocity):
-            body.velocity = (float(v[0]), float(v[1]))
+            body.velocity = plane_point(v)
             body.angular_velocity = float(w)
         self._target = (target_position, self.angle + angular_velocity * control_dt)
         self.pose = (position3, rotation)

@@ -81,7 +81,7 @@ class PlanarScytheScene:
         self.min_cut_speed = float(min_cut_speed)
         self.success_window = float(success_window)
         self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
-        self.parameters = (
+        self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
                 "grass_position", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
                 (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m", axes=(0, 1),
@@ -123,12 +123,11 @@ class PlanarScytheScene:
     def step(self, tool_pose: ToolPose) -> None:
         """Move the blade to ``tool_pose`` over ``control_dt`` and cut what it sweeps."""
         require_reset(self)
-        first = not self._tool.placed
-        previous = self._tool.pose
+        previous = self._tool.pose  # None before the first step
         start_position, start_angle = self._tool.position.copy(), self._tool.angle.copy()
         self._tool.begin_step(tool_pose, self.control_dt)
-        if not first:
-            self._cut_swept_stalks(previous, start_position, start_angle)
+        if previous is not None and self._tool.pose is not None:
+            self._cut_swept_stalks(previous, self._tool.pose, start_position, start_angle)
         for space in self._spaces:  # kinematic bodies integrate exactly over one step
             space.step(self.control_dt)
         self._tool.end_step()
@@ -137,9 +136,11 @@ class PlanarScytheScene:
         self._all_cut_at = np.where(done & ~np.isfinite(self._all_cut_at), self._time, self._all_cut_at)
 
     def _cut_swept_stalks(
-        self, previous: tuple[np.ndarray, np.ndarray], start_position: np.ndarray, start_angle: np.ndarray
+        self, previous: tuple[np.ndarray, np.ndarray], current: tuple[np.ndarray, np.ndarray],
+        start_position: np.ndarray, start_angle: np.ndarray,
     ) -> None:
-        """Mark stalks swept by the blade over this step (see the module docstring)."""
+        """Mark stalks swept by the blade over this step, from its ``previous`` to its ``current`` 3D
+        pose ((B, 3) m, (B, 3, 3)) (see the module docstring)."""
         fractions = np.linspace(0.0, 1.0, self.substeps + 1)[:, None]  # (S+1, 1)
         velocity = np.array([tuple(body.velocity) for body in self._tool.bodies])  # (B, 2) m/s
         angular_velocity = np.array([body.angular_velocity for body in self._tool.bodies])  # (B,) rad/s
@@ -159,7 +160,7 @@ class PlanarScytheScene:
         on_blade = (s_cross >= 0.0) & (s_cross <= blade_length[None, :, None])
         speed = np.abs(a1 - a0) / (self.control_dt / self.substeps)
         # Blade height at the crossing: 3D root and tip heights interpolated in time and along the blade.
-        (p0, r0), (p1, r1) = previous, self._tool.pose
+        (p0, r0), (p1, r1) = previous, current
         tip0 = p0[:, 2] + r0[:, 2, 0] * self._blade_points[1, 0]
         tip1 = p1[:, 2] + r1[:, 2, 0] * self._blade_points[1, 0]
         time = (fractions[:-1, :, None] + weight / self.substeps)  # (S, B, M) fraction of the step

@@ -50,7 +50,7 @@ from toolimit.scenes.base import (
     parameter_violation,
     require_reset,
 )
-from toolimit.scenes.planar.kinematic_tool import KinematicTool
+from toolimit.scenes.planar.kinematic_tool import KinematicTool, plane_point
 from toolimit.scenes.planar.sand_pile import (
     SandMaterial,
     add_circles,
@@ -138,7 +138,7 @@ class PlanarSpadeScene:
         spec = tool_spec("spade")
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
         low, high = (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0), (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0)
-        self.parameters = (
+        self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec("sand_position", "position", low, high, on_ground=True, unit="m",
                           description="centre of the sand deposit tray on the ground (x used)", axes=(0,)),
             ParameterSpec("goal_position", "position", low, high, on_ground=True, unit="m",
@@ -212,7 +212,7 @@ class PlanarSpadeScene:
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
         self._segments = []
         self._segment_points = np.zeros((batch_size, 4, 2))
-        for space, body in zip(self._spaces, self._tool.bodies):
+        for body in self._tool.bodies:
             segments = [pymunk.Segment(body, (0, 0), (0, 0), self.blade_radius) for _ in range(3)]
             for segment in segments:
                 segment.friction = self.sand.friction
@@ -246,7 +246,7 @@ class PlanarSpadeScene:
         """Reshape the segments to the projected outline (B, 4, 2) where it changed by > 0.1 mm."""
         changed = np.abs(local - self._segment_points).max(axis=(1, 2)) > 1e-4
         for b in np.flatnonzero(changed):
-            tip, heel, lip, handle = (tuple(map(float, p)) for p in local[b])
+            tip, heel, lip, handle = (plane_point(p) for p in local[b])
             blade, lip_segment, handle_segment = self._segments[b]
             blade.unsafe_set_endpoints(tip, heel)
             lip_segment.unsafe_set_endpoints(heel, lip)

@@ -37,7 +37,7 @@ from toolimit.scenes.base import (
     require_reset,
 )
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
-from toolimit.scenes.spatial.tool_motion import interpolate_poses
+from toolimit.scenes.spatial.tool_motion import interpolate_poses, tool_snapshot
 from toolimit.tools import ToolPose
 
 
@@ -136,7 +136,7 @@ class SpatialHammerScene:
         #: (P, 3) points on the hammer head box's surface (tool_geometry's head box), tool frame, m.
         self.head_points = head.center + box_surface_points(head.half_extents) @ head.rotation.T
         lowest_head_top = self.plate_thickness + self.protrusion
-        self.parameters = (
+        self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
                 "nail_position",
                 "position",
@@ -202,7 +202,7 @@ class SpatialHammerScene:
         """Move the hammer to ``tool_pose`` over ``control_dt`` and simulate the nail."""
         require_reset(self)
         position, rotation = batched_pose(tool_pose, self.batch_size)
-        if self.tool_position is None:
+        if self.tool_position is None or self.tool_rotation is None:
             self.tool_position, self.tool_rotation = position, rotation
             return
         fractions = np.arange(self.substeps + 1) / self.substeps
@@ -302,7 +302,6 @@ class SpatialHammerScene:
         plate_half = np.array([self.plate_half_size, self.plate_half_size, self.plate_thickness / 2])
         shank_half = np.array([self.shank_radius, self.shank_radius, self.shank_length / 2])
         board_half = np.array([self.board_half_size, self.board_half_size, self.board_top / 2])
-        placed = self.tool_position is not None
         return {
             "nail_top": np.array([x, y, top]),
             "plate_center": np.array([x, y, top - self.plate_thickness / 2]),
@@ -312,7 +311,6 @@ class SpatialHammerScene:
             "board_center": np.array([x, y, self.board_top / 2]),
             "board_half_extents": board_half,
             "remaining_depth": np.array(self.remaining_depth()[0]),
-            "tool_position": self.tool_position[0].copy() if placed else np.full(3, np.nan),
-            "tool_rotation": self.tool_rotation[0].copy() if placed else np.full((3, 3), np.nan),
+            **tool_snapshot(self.tool_position, self.tool_rotation),
             "time": np.array(self.time),
         }

@@ -35,10 +35,7 @@ def _friction(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k):  # type: ignore[no-unt
     along = rx * nx + ry * ny + rz * nz
     tx, ty, tz = rx - along * nx, ry - along * ny, rz - along * nz
     slip = math.sqrt(tx * tx + ty * ty + tz * tz)
-    if slip < mu_s * depth:
-        scale = 1.0
-    else:
-        scale = min(mu_k * depth / max(slip, 1e-15), 1.0)
+    scale = 1.0 if slip < mu_s * depth else min(mu_k * depth / max(slip, 1e-15), 1.0)
     return -tx * scale, -ty * scale, -tz * scale
 
 

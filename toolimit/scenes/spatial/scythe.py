@@ -35,7 +35,7 @@ from toolimit.scenes.base import (
 )
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
-from toolimit.scenes.spatial.tool_motion import interpolate_poses
+from toolimit.scenes.spatial.tool_motion import interpolate_poses, tool_snapshot
 from toolimit.tools import ToolPose, rotation_z
 
 
@@ -145,7 +145,7 @@ class SpatialScytheScene:
         #: (2, 3) edge root and tip in the tool frame, m.
         self.edge = np.array([[blade.center[0] - extent, 0.0, 0.0], [blade.center[0] + extent, 0.0, 0.0]])
         self.blade_length = 2.0 * extent
-        self.parameters = (
+        self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
                 "grass_position",
                 "position",
@@ -197,7 +197,7 @@ class SpatialScytheScene:
         """Move the scythe to ``tool_pose`` over ``control_dt`` and cut the stalks it crosses."""
         require_reset(self)
         position, rotation = batched_pose(tool_pose, self.batch_size)
-        if self.tool_position is None:
+        if self.tool_position is None or self.tool_rotation is None:
             self.tool_position, self.tool_rotation = position, rotation
             return
         s, b = self.substeps, self.batch_size
@@ -265,7 +265,7 @@ class SpatialScytheScene:
         cut); the paper's appendix coefficients are not reproduced.
         """
         cut_count = self.goal_reward()
-        if self.tool_position is None:
+        if self.tool_position is None or self.tool_rotation is None:
             return cut_count
         edge = self.tool_position[:, None, :] + self.edge @ np.swapaxes(self.tool_rotation, 1, 2)  # (B, 2, 3)
         targets = np.concatenate(
@@ -295,11 +295,9 @@ class SpatialScytheScene:
         ``patch_yaw`` () rad, ``blade`` (2, 3) edge root and tip in the world (NaN before the
         first step), ``tool_position`` (3,), ``tool_rotation`` (3, 3), ``time`` () s.
         """
-        placed = self.tool_position is not None
+        tool = tool_snapshot(self.tool_position, self.tool_rotation)
         base = np.column_stack([self.stalks_xy[0], np.zeros(self.n_stalks)])
-        blade = (
-            self.tool_position[0] + self.edge @ self.tool_rotation[0].T if placed else np.full((2, 3), np.nan)
-        )
+        blade = tool["tool_position"] + self.edge @ tool["tool_rotation"].T  # NaN before the first step
         return {
             "stalk_base": base,
             "stalk_half_extents": np.array([self.stalk_width / 2, self.stalk_width / 2, self.stalk_height / 2]),
@@ -308,7 +306,6 @@ class SpatialScytheScene:
             "patch_half_extents": np.array(self.patch_size) / 2,
             "patch_yaw": np.array(self.grass_yaw),
             "blade": blade,
-            "tool_position": self.tool_position[0].copy() if placed else np.full(3, np.nan),
-            "tool_rotation": self.tool_rotation[0].copy() if placed else np.full((3, 3), np.nan),
+            **tool,
             "time": np.array(self.time),
         }

@@ -87,6 +87,7 @@ from toolimit.scenes.spatial.tool_geometry import (
     SPADE_RIM_HEIGHT,
     tool_shapes,
 )
+from toolimit.scenes.spatial.tool_motion import tool_snapshot
 from toolimit.tools import ToolPose, rotation_z
 
 #: Inner side of the square sand deposit (m), its wall height and thickness (m).
@@ -212,7 +213,7 @@ class SpatialSpadeScene:
         self.material = material
         self.control_dt = float(control_dt)
         self.shapes = tool_shapes("spade")
-        self.parameters = (
+        self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
                 "sand_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
                 high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
@@ -314,7 +315,7 @@ class SpatialSpadeScene:
     def tool_pose(self) -> ToolPose | None:
         """The spade's current pose ((B, 3), (B, 3, 3) world frame), None before the first step."""
         world = self._require_reset()
-        if world.tool_position is None:
+        if world.tool_position is None or world.tool_rotation is None:
             return None
         return ToolPose(world.tool_position.copy(), world.tool_rotation.copy())
 
@@ -330,7 +331,7 @@ class SpatialSpadeScene:
     def spheres_on_spade(self) -> np.ndarray:
         """(B, N) bool: sphere centres above the blade's carrying face, within its rim (tool frame)."""
         world = self._require_reset()
-        if world.tool_position is None:
+        if world.tool_position is None or world.tool_rotation is None:
             return np.zeros((self.batch_size, self.n_spheres), dtype=bool)
         local = np.einsum("bnj,bja->bna", world.positions - world.tool_position[:, None], world.tool_rotation)
         return (
@@ -388,7 +389,6 @@ class SpatialSpadeScene:
         ``goal_wall_height`` (), ``tool_position`` (3,), ``tool_rotation`` (3, 3) (NaN before the
         first step), ``in_box`` () count; world frame, metres."""
         world = self._require_reset()
-        placed = world.tool_position is not None
         return {
             "sphere_positions": world.positions[0].copy(),
             "sphere_radius": np.array(self.material.radius),
@@ -400,7 +400,6 @@ class SpatialSpadeScene:
             "goal_position": self.goal_position.copy(),
             "goal_inner": np.array(GOAL_INNER),
             "goal_wall_height": np.array(GOAL_WALL_HEIGHT),
-            "tool_position": world.tool_position[0].copy() if placed else np.full(3, np.nan),
-            "tool_rotation": world.tool_rotation[0].copy() if placed else np.full((3, 3), np.nan),
+            **tool_snapshot(world.tool_position, world.tool_rotation),
             "in_box": np.array(self.goal_reward()[0]),
         }

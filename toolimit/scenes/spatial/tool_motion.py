@@ -32,3 +32,11 @@ def interpolate_poses(
     rotations = start_rotation[None] @ steps
     positions = start_position[None] + fractions[:, None, None] * (end_position - start_position)[None]
     return positions, rotations
+
+
+def tool_snapshot(position: np.ndarray | None, rotation: np.ndarray | None) -> dict[str, np.ndarray]:
+    """Instance 0's tool pose for a scene snapshot: ``tool_position`` (3,) m and ``tool_rotation``
+    (3, 3) world-from-tool, from (B, 3) and (B, 3, 3); NaN before the tool's first step (None)."""
+    if position is None or rotation is None:
+        return {"tool_position": np.full(3, np.nan), "tool_rotation": np.full((3, 3), np.nan)}
+    return {"tool_position": position[0].copy(), "tool_rotation": rotation[0].copy()}
