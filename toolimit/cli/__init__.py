@@ -14,6 +14,7 @@ import argparse
 import importlib
 import sys
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 from typing import NoReturn
 
@@ -65,6 +66,31 @@ def check_output_file(path: Path | None, option: str, suffix: str) -> None:
     if path.suffix != suffix:
         raise CliError(f"{option}: expected a {suffix} file name, got {path}")
     check_writable_folder(path.parent, option)
+
+
+def check_choice(option: str, value: str, choices: Iterable[str], what: str) -> None:
+    """CliError unless ``value`` is one of ``choices``: names the option, the ``what`` ("tool for
+    world 3d") and the choices."""
+    known = list(choices)
+    if value not in known:
+        raise CliError(f"{option}: unknown {what} {value!r}; choose one of {', '.join(known)}")
+
+
+def check_scene(tool: str, world: str) -> None:
+    """CliError unless a scene exists for ``--tool`` in ``--world`` (the world is checked first)."""
+    from toolimit.scenes.registry import WORLDS, available_scenes
+
+    check_choice("--world", world, WORLDS, "world")
+    tools = sorted(name for name, scene_world in available_scenes() if scene_world == world)
+    if tool not in tools:
+        raise CliError(f"--tool: unknown tool {tool!r} for world {world}; choose one of {', '.join(tools)}")
+
+
+def check_count(option: str, value: int, minimum: int = 1) -> None:
+    """CliError unless ``value`` >= ``minimum`` (1: a positive integer, 0: a non-negative one)."""
+    if value < minimum:
+        kind = "positive" if minimum == 1 else "non-negative" if minimum == 0 else f">= {minimum}"
+        raise CliError(f"{option}: must be a {kind} integer, got {value}")
 
 
 def build_parser() -> argparse.ArgumentParser:

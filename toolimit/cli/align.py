@@ -17,8 +17,10 @@ from pathlib import Path
 
 from toolimit.cli import (
     CliError,
+    check_count,
     check_output_file,
     check_output_folder,
+    check_scene,
     check_writable_folder,
 )
 
@@ -66,23 +68,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _check_arguments(args: argparse.Namespace) -> int:
     """Validate before any work; returns the worker count."""
-    from toolimit.scenes.registry import WORLDS, available_scenes
-
-    if args.world not in WORLDS:
-        raise CliError(f"--world: unknown world {args.world!r}; choose one of {', '.join(WORLDS)}")
-    tools = sorted(tool for tool, world in available_scenes() if world == args.world)
-    if args.tool not in tools:
-        raise CliError(f"--tool: unknown tool {args.tool!r} for world {args.world}; choose one of {', '.join(tools)}")
-    for name in ("samples", "candidates"):
-        if getattr(args, name) <= 0:
-            raise CliError(f"--{name}: must be a positive integer, got {getattr(args, name)}")
+    check_scene(args.tool, args.world)
+    check_count("--samples", args.samples)
+    check_count("--candidates", args.candidates)
     if args.z_offset_std is not None and not args.z_offset_std > 0:
         raise CliError(f"--z-offset-std: must be a positive number of metres, got {args.z_offset_std}")
-    if args.seed < 0:
-        raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
+    check_count("--seed", args.seed, minimum=0)
     workers = args.workers if args.workers is not None else max(1, min(4, os.cpu_count() or 1))
-    if workers <= 0:
-        raise CliError(f"--workers: must be a positive integer, got {workers}")
+    check_count("--workers", workers)
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
     check_output_folder(args.out, "--out")

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, check_writable_folder
+from toolimit.cli import CliError, check_choice, check_count, check_writable_folder
 
 if TYPE_CHECKING:
     from toolimit.demos import ToolDemo
@@ -33,10 +33,8 @@ def run_synth(args: argparse.Namespace) -> int:
     from toolimit.demos import save_demo, synthesize_demo
     from toolimit.tools import TOOLS
 
-    if args.tool not in TOOLS:
-        raise CliError(f"--tool: unknown tool {args.tool!r}; choose one of {', '.join(sorted(TOOLS))}")
-    if args.seed < 0:
-        raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
+    check_choice("--tool", args.tool, sorted(TOOLS), "tool")
+    check_count("--seed", args.seed, minimum=0)
     if not args.fps > 0:
         raise CliError(f"--fps: must be positive, got {args.fps}")
     if args.out.suffix != ".npz":

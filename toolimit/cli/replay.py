@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from toolimit.cli import CliError
+from toolimit.cli import CliError, check_count, check_scene
 
 #: The original authors' aligned files' parameter names and the scenes' names for them.
 ORIGINAL_PARAMETER_NAMES = {
@@ -64,17 +64,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _check_arguments(args: argparse.Namespace) -> None:
     """Validate the options that need no file (before any work)."""
-    from toolimit.scenes.registry import WORLDS, available_scenes
-
-    if args.world not in WORLDS:
-        raise CliError(f"--world: unknown world {args.world!r}; choose one of {', '.join(WORLDS)}")
-    tools = sorted(tool for tool, world in available_scenes() if world == args.world)
-    if args.tool not in tools:
-        raise CliError(f"--tool: unknown tool {args.tool!r} for world {args.world}; choose one of {', '.join(tools)}")
-    if args.replays <= 0:
-        raise CliError(f"--replays: must be a positive integer, got {args.replays}")
-    if args.seed < 0:
-        raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
+    check_scene(args.tool, args.world)
+    check_count("--replays", args.replays)
+    check_count("--seed", args.seed, minimum=0)
     if args.frame == "original-spade" and args.tool != "spade":
         raise CliError(f"--frame original-spade: only for the spade, not {args.tool}")
     if args.html is not None:

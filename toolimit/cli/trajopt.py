@@ -12,11 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import (
-    CliError,
-    check_output_file,
-    check_output_folder,
-)
+from toolimit.cli import CliError, check_choice, check_count, check_output_file, check_output_folder
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -89,14 +85,10 @@ def run(args: argparse.Namespace) -> int:
         track,
     )
 
-    if args.robot not in ROBOTS:
-        raise CliError(f"--robot: unknown robot {args.robot!r}; choose one of {', '.join(ROBOTS)}")
-    if args.tool not in TOOLS:
-        raise CliError(f"--tool: unknown tool {args.tool!r}; choose one of {', '.join(sorted(TOOLS))}")
-    if args.starts <= 0:
-        raise CliError(f"--starts: must be a positive integer, got {args.starts}")
-    if args.seed < 0:
-        raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
+    check_choice("--robot", args.robot, ROBOTS, "robot")
+    check_choice("--tool", args.tool, sorted(TOOLS), "tool")
+    check_count("--starts", args.starts)
+    check_count("--seed", args.seed, minimum=0)
     scale = _time_scale(args.time_scale)
     for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
         if not (value >= 0 and value < float("inf")):

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from toolimit.demos.npz_format import finite_frames
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.errors import DemoError
 from toolimit.tools import tool_spec
@@ -134,13 +135,7 @@ def _matrix(path: Path, data: dict, key: str, rows: int) -> np.ndarray:
     value = np.asarray(data[key])  # np.matrix -> ndarray
     if value.ndim != 2 or value.shape[0] != rows:
         raise DemoError(f"{path}: key {key!r} must have shape ({rows}, nf), got {value.shape}")
-    if not np.issubdtype(value.dtype, np.number):
-        raise DemoError(f"{path}: key {key!r} must be numeric, got dtype {value.dtype}")
-    value = value.astype(float)
-    if not np.all(np.isfinite(value)):
-        frames = np.unique(np.nonzero(~np.isfinite(value))[1])
-        raise DemoError(f"{path}: key {key!r} has NaN or inf at frames {frames[:10].tolist()}")
-    return value
+    return finite_frames(path, key, value, frame_axis=1)
 
 
 def canonical_demo(estimate: MotionEstimate, tool: str, rescale: str = "tool") -> ToolDemo:

@@ -190,7 +190,8 @@ def _targets_matrices(targets: ToolPose | np.ndarray) -> np.ndarray:
     return matrices
 
 
-def replay_visualizer(
+def replay_to_html(
+    path: str | os.PathLike[str],
     frames: Sequence[Mapping[str, np.ndarray]],
     tool: str,
     robot: RobotVisual | None = None,
@@ -198,10 +199,11 @@ def replay_visualizer(
     targets: ToolPose | np.ndarray | None = None,
     fps: float = CONTROL_FPS,
     target_scale: float = 0.08,
-) -> meshcat.Visualizer:
-    """A server-less visualizer holding the animated replay.
+) -> Path:
+    """Write the animated replay as one self-contained HTML file (a server-less meshcat visualizer).
 
     Args:
+        path: the .html file to write.
         frames: scene snapshots (instance 0), one per animation frame; each has ``tool_position``
             (3,) and ``tool_rotation`` (3, 3) (NaN while the tool is absent) plus the world's keys.
         tool: "spade", "hammer" or "scythe": chooses the world drawing and the tool geometry.
@@ -257,7 +259,7 @@ def replay_visualizer(
     if not placed:
         visualizer[TOOL].set_property("visible", False)
     visualizer.set_animation(animation, play=True, repetitions=1)
-    return visualizer
+    return save_html(visualizer, path)
 
 
 def set_robot_frame(frame, robot_viz: MeshcatVisualizer, q: np.ndarray) -> None:
@@ -267,19 +269,6 @@ def set_robot_frame(frame, robot_viz: MeshcatVisualizer, q: np.ndarray) -> None:
     for index, geometry in enumerate(robot_viz.visual_model.geometryObjects):
         transform = applyScalingOnHomegeneousTransform(robot_viz.visual_data.oMg[index].homogeneous, geometry.meshScale)
         frame[robot_viz.getViewerNodeName(geometry, pin.GeometryType.VISUAL)].set_transform(transform)
-
-
-def replay_to_html(
-    path: str | os.PathLike[str],
-    frames: Sequence[Mapping[str, np.ndarray]],
-    tool: str,
-    robot: RobotVisual | None = None,
-    robot_q: np.ndarray | None = None,
-    targets: ToolPose | np.ndarray | None = None,
-    fps: float = CONTROL_FPS,
-) -> Path:
-    """Write the animated replay (see :func:`replay_visualizer`) as one self-contained HTML file."""
-    return save_html(replay_visualizer(frames, tool, robot, robot_q, targets, fps), path)
 
 
 # -------------------------------------------------------------------------------------- replays
