@@ -16,10 +16,13 @@ import sys
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 from toolimit import interrupts
 from toolimit.errors import InputError, ToolimitError
+
+if TYPE_CHECKING:
+    from toolimit.trajopt import PoseTargets
 
 COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.replay", "toolimit.cli.trajopt",
             "toolimit.cli.export", "toolimit.cli.learn", "toolimit.cli.evaluate", "toolimit.cli.run")
@@ -91,6 +94,24 @@ def check_count(option: str, value: int, minimum: int = 1) -> None:
     if value < minimum:
         kind = "positive" if minimum == 1 else "non-negative" if minimum == 0 else f">= {minimum}"
         raise CliError(f"{option}: must be a {kind} integer, got {value}")
+
+
+def add_frame_argument(parser: argparse.ArgumentParser) -> None:
+    """``--frame``: the orientation convention of a poses file (see :func:`load_poses`)."""
+    parser.add_argument(
+        "--frame", choices=("tool", "original-spade"), default="tool",
+        help="orientation convention of the poses: toolimit's tool frame (default), or the original code's "
+             "spade tip frame of the shared real recordings (converted to the tool frame)",
+    )
+
+
+def load_poses(path: Path, frame: str) -> PoseTargets:
+    """The target poses of the file ``path`` in toolimit's tool frame (converted from the original
+    code's spade tip frame when ``frame`` is "original-spade")."""
+    from toolimit.trajopt import from_original_spade_tip, load_pose_targets
+
+    targets = load_pose_targets(path)
+    return from_original_spade_tip(targets) if frame == "original-spade" else targets
 
 
 def build_parser() -> argparse.ArgumentParser:

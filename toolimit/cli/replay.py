@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from toolimit.cli import CliError, check_count, check_scene
+from toolimit.cli import CliError, add_frame_argument, check_count, check_scene, load_poses
 
 #: The original authors' aligned files' parameter names and the scenes' names for them.
 ORIGINAL_PARAMETER_NAMES = {
@@ -43,11 +43,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
     parser.add_argument("--world", default="3d", help="planar or 3d (default: 3d)")
     parser.add_argument("--poses", required=True, type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
-    parser.add_argument(
-        "--frame", choices=("tool", "original-spade"), default="tool",
-        help="orientation convention of the poses: toolimit's tool frame (default), or the original code's "
-             "spade tip frame of the shared real recordings (converted to the tool frame)",
-    )
+    add_frame_argument(parser)
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--params", type=Path, help="JSON object of the scene's parameters")
     source.add_argument(
@@ -121,12 +117,9 @@ def run(args: argparse.Namespace) -> int:
     from toolimit.artifacts import save_json
     from toolimit.scenes.registry import make_scene
     from toolimit.scenes.replay import replay
-    from toolimit.trajopt import from_original_spade_tip, load_pose_targets
 
     _check_arguments(args)
-    targets = load_pose_targets(args.poses)
-    if args.frame == "original-spade":
-        targets = from_original_spade_tip(targets)
+    targets = load_poses(args.poses, args.frame)
     scene = make_scene(args.tool, args.world)
     if abs(targets.fps * scene.control_dt - 1.0) > 1e-6:
         raise CliError(f"--poses: {args.poses} is at {targets.fps:g} fps; the scene steps at {1 / scene.control_dt:g} fps")

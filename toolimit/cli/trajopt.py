@@ -12,7 +12,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from toolimit.cli import CliError, check_choice, check_count, check_output_file, check_output_folder
+from toolimit.cli import (
+    CliError,
+    add_frame_argument,
+    check_choice,
+    check_count,
+    check_output_file,
+    check_output_folder,
+    load_poses,
+)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -27,11 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--alignment", type=Path, help="alignment output folder (reads aligned_demo.npz)")
     source.add_argument("--poses", type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
-    parser.add_argument(
-        "--frame", choices=("tool", "original-spade"), default="tool",
-        help="orientation convention of the poses: toolimit's tool frame (default), or the original code's "
-             "spade tip frame of the shared real recordings (converted to the tool frame)",
-    )
+    add_frame_argument(parser)
     parser.add_argument("--out", required=True, type=Path, help="output folder")
     parser.add_argument("--time-scale", default="1", help="slow-down factor (>0) or 'auto' (default: 1)")
     parser.add_argument("--starts", type=int, default=8, help="base initialisations (default: 8)")
@@ -80,8 +84,6 @@ def run(args: argparse.Namespace) -> int:
         TrackingWeights,
         TrackOptions,
         choose_time_scale,
-        from_original_spade_tip,
-        load_pose_targets,
         track,
     )
 
@@ -105,9 +107,7 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"--alignment: {poses_path} not found (run `toolimit align` first)")
     else:
         poses_path = args.poses
-    targets = load_pose_targets(poses_path)
-    if args.frame == "original-spade":
-        targets = from_original_spade_tip(targets)
+    targets = load_poses(poses_path, args.frame)
 
     robot = make_robot(args.robot, tool=args.tool)
     rng = np.random.default_rng(args.seed)
