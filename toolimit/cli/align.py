@@ -129,7 +129,8 @@ def run(args: argparse.Namespace) -> int:
         return stop.exit_code
     write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
     if result.cleaning is not None:
-        print(f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced")
+        print(f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced "
+              f"({len(result.cleaning.head_replaced_frames)} of them with the head's position)")
     rejected = result.samples_rejected / max(result.samples_tried, 1)
     print(
         f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples "

@@ -39,7 +39,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
              "spade tip frame of the shared real recordings (converted to the tool frame)",
     )
     parser.add_argument("--out", required=True, type=Path, help="output folder")
-    parser.add_argument("--time-scale", default="1", help="slow-down factor (>0) or 'auto' (default: 1)")
+    parser.add_argument(
+        "--time-scale", default="1",
+        help="slow-down factor (>0; default: 1), or several comma-separated, or 'auto' (1,1.5,2,2.5,3,4,5): of "
+             "several, the smallest whose tracking error has a median under 1 cm, or with --select-by-robot the "
+             "one whose robot replay earns the most",
+    )
     parser.add_argument("--starts", type=int, default=8, help="base initialisations (default: 8)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the random starts beyond 8 (default: 0)")
     parser.add_argument(
@@ -62,17 +67,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def _time_scale(text: str) -> float | None:
-    """None for 'auto', else a positive float."""
+def _time_scales(text: str) -> tuple[float, ...]:
+    """The scales of --time-scale: 'auto' is ``TIME_SCALE_GRID``, else comma-separated positive numbers."""
+    from toolimit.trajopt import TIME_SCALE_GRID
+
     if text == "auto":
-        return None
+        return TIME_SCALE_GRID
     try:
-        value = float(text)
+        values = tuple(float(part) for part in text.split(","))
     except ValueError:
-        raise CliError(f"--time-scale: expected a positive number or 'auto', got {text!r}") from None
-    if not value > 0 or value != value or value == float("inf"):
-        raise CliError(f"--time-scale: must be a positive finite number, got {text!r}")
-    return value
+        raise CliError(f"--time-scale: expected positive numbers (comma-separated) or 'auto', got {text!r}") from None
+    if not all(0 < value < float("inf") for value in values):
+        raise CliError(f"--time-scale: every scale must be a positive finite number, got {text!r}")
+    return values
 
 
 def run(args: argparse.Namespace) -> int:
@@ -98,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--starts: must be a positive integer, got {args.starts}")
     if args.seed < 0:
         raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
-    scale = _time_scale(args.time_scale)
+    scales = _time_scales(args.time_scale)
     for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
         if not (value >= 0 and value < float("inf")):
             raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
@@ -122,18 +129,15 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     initialisations = ("hold", "rollout") if args.init == "both" else (args.init,)
     options = TrackOptions(weights=TrackingWeights(velocity=args.velocity_weight, posture=args.posture_weight), starts=args.starts,
-                           time_scale=scale or 1.0, initialisations=initialisations, progress=not args.quiet)
-    def solve(robot, targets, options, rng):
-        if scale is None:
-            return choose_time_scale(robot, targets, options, rng=rng)
-        return track(robot, targets, options, rng=rng)
-
+                           time_scale=scales[0], initialisations=initialisations, progress=not args.quiet)
     if args.select_by_robot:
-        targets, result = _select_by_robot(args, robot, options, solve)
+        targets, result = _select_by_robot(args, robot, options, scales)
         if result is None:
             return 1
+    elif len(scales) > 1:
+        result = choose_time_scale(robot, targets, options, grid=scales, rng=rng)
     else:
-        result = solve(robot, targets, options, rng)
+        result = track(robot, targets, options, rng=rng)
     result.save(args.out)
     if args.rerun is not None:
         from toolimit.viz.rerun_trajopt import save_trajectory_recording
@@ -152,9 +156,9 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _select_by_robot(args: argparse.Namespace, robot, options, solve):
-    """Track and replay every candidate of ``args.alignment``; (targets, result) of the best, or
-    (None, None) after saying why no candidate's robot replay earned a reward."""
+def _select_by_robot(args: argparse.Namespace, robot, options, time_scales: tuple[float, ...]):
+    """Track and replay every candidate of ``args.alignment`` at each of ``time_scales``; (targets,
+    result) of the best, or (None, None) after saying why no candidate's robot replay earned a reward."""
     from toolimit.align.outputs import CANDIDATES_NPZ
     from toolimit.artifacts import save_json
     from toolimit.trajopt.selection import load_candidates, select_by_robot_execution
@@ -162,8 +166,8 @@ def _select_by_robot(args: argparse.Namespace, robot, options, solve):
     tool, world, candidates = load_candidates(args.alignment / CANDIDATES_NPZ)
     if tool != args.tool:
         raise CliError(f"--tool: the alignment in {args.alignment} is for the {tool}, not the {args.tool}")
-    selection = select_by_robot_execution(robot, candidates, tool, world, options, solve, seed=args.seed,
-                                          progress=not args.quiet)
+    selection = select_by_robot_execution(robot, candidates, tool, world, options, seed=args.seed,
+                                          progress=not args.quiet, time_scales=time_scales)
     save_json(args.out / "selection.json", selection.record(candidates))
     for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):
         if trajectory is None:
