@@ -67,7 +67,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def _time_scales(text: str) -> tuple[float, ...]:
+def parse_time_scales(text: str) -> tuple[float, ...]:
     """The scales of --time-scale: 'auto' is ``TIME_SCALE_GRID``, else comma-separated positive numbers."""
     from toolimit.trajopt import TIME_SCALE_GRID
 
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--starts: must be a positive integer, got {args.starts}")
     if args.seed < 0:
         raise CliError(f"--seed: must be a non-negative integer, got {args.seed}")
-    scales = _time_scales(args.time_scale)
+    scales = parse_time_scales(args.time_scale)
     for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
         if not (value >= 0 and value < float("inf")):
             raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
