@@ -22,7 +22,7 @@ from toolimit.align.search import align
 from toolimit.artifacts import save_json
 from toolimit.demos import clean_demo, load_demo
 from toolimit.robots import make_robot
-from toolimit.trajopt import PoseTargets, TrackingWeights, TrackOptions, track
+from toolimit.trajopt import PoseTargets, TrackingWeights, TrackOptions
 from toolimit.trajopt.selection import AlignedCandidate, select_by_robot_execution
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,9 +48,7 @@ def main() -> None:
             _, _, poses = result.aligned_motion(candidate)
             targets = PoseTargets(np.asarray(poses.position), np.asarray(poses.rotation), fps=result.demo.fps)
             candidates.append(AlignedCandidate(targets, candidate.sample.params, candidate.reward))
-        selection = select_by_robot_execution(
-            robot, candidates, "spade", "planar", options, lambda r, t, o, g: track(r, t, o, rng=g), progress=False,
-        )
+        selection = select_by_robot_execution(robot, candidates, "spade", "planar", options, progress=False)
         robot_rewards = np.nan_to_num(selection.robot_rewards, nan=0.0)
         row = {
             "demo": f"spade_{i:02d}",

@@ -34,6 +34,8 @@ def test_learn_from_a_registered_id_then_evaluate(tmp_path, capsys):
      "no shipped task for the spade in planar with robot ur5"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
     (["evaluate", "--policy", "absent"], "--policy: no such folder"),
+    (["run", "--tool", "spade", "--robot", "panda", "--demo", "absent.npz", "--time-scale", "slow"],
+     "--time-scale: expected positive numbers"),
 ])
 def test_bad_input_gets_one_line(tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)

@@ -90,6 +90,8 @@ def test_alignment_folder_and_auto_time_scale(tmp_path):
     [
         (["--time-scale", "fast"], "--time-scale"),
         (["--time-scale", "-1"], "--time-scale"),
+        (["--time-scale", "1,,2"], "--time-scale"),
+        (["--time-scale", "1,nan"], "--time-scale"),
         (["--starts", "0"], "--starts"),
         (["--seed", "-3"], "--seed"),
         (["--velocity-weight", "-1"], "--velocity-weight"),

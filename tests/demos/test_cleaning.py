@@ -59,6 +59,20 @@ def test_real_spade_flips_are_removed(video_demos_dir):
     # Where the video was fine, the motion is kept within a centimetre.
     kept = np.setdiff1d(np.arange(demo.n_frames), report.replaced_frames)
     assert np.linalg.norm(cleaned.head[kept] - demo.head[kept], axis=1).max() < 0.011
+    # The flips turn the tool about its blade: the blade's path (its thrust into the sand at frames
+    # 19-24, the dig) is kept through them, only the axis is replaced.
+    assert report.head_replaced_frames.size == 0
+    assert np.linalg.norm(cleaned.head - demo.head, axis=1).max() <= report.thresholds["max_smoothing_shift"] + 1e-9
+
+
+def test_a_flip_about_the_head_keeps_the_head_path():
+    clean = synthesize_motion("spade", 0).clean
+    handle = clean.handle.copy()
+    handle[30:41] = 2 * clean.head[30:41] - handle[30:41]  # the axis reversed, the head where it was
+    cleaned, report = clean_demo(ToolDemo(clean.head, handle, clean.fps, "spade"))
+    assert report.replaced_frames.tolist() == list(range(30, 41)) and report.head_replaced_frames.size == 0
+    assert np.linalg.norm(cleaned.head - clean.head, axis=1).max() < 0.006
+    assert np.degrees(np.arccos(np.clip(np.sum(cleaned.axis * clean.axis, axis=1), -1, 1))).max() < 2.0
 
 
 def test_real_spade_example_without_flips_is_kept(video_demos_dir):

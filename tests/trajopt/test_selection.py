@@ -70,6 +70,25 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
     assert ("tracked upside down" in printed.err) == record["upside_down"]
 
 
+def test_selection_keeps_the_time_scale_whose_robot_replay_earns_most(spade_alignment, tmp_path, capsys):
+    _, alignment = spade_alignment
+    out = tmp_path / "planar3"
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment), "--select-by-robot",
+            "--velocity-weight", "1e-4", "--init", "hold", "--starts", "2", "--time-scale", "2,1", "--quiet",
+            "--out", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    selection = json.loads((out / "selection.json").read_text())
+    for entry in selection["candidates"]:
+        by_scale = entry["robot_reward_by_time_scale"]
+        assert set(by_scale) == {"1", "2"}
+        earned = [reward for reward in by_scale.values() if reward is not None]
+        assert entry["robot_reward"] == (max(earned) if earned else None)
+        if entry["robot_reward"] is not None and len(set(earned)) == 2:
+            assert by_scale[f"{entry['time_scale']:g}"] == entry["robot_reward"]
+    best = selection["candidates"][selection["best"]]
+    assert json.loads((out / "trajectory.json").read_text())["time_scale"] == best["time_scale"]
+
+
 def test_selection_needs_an_alignment(tmp_path, capsys, video_demos_dir):
     argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--poses", str(video_demos_dir / "spade_video1_aligned.npz"),
             "--select-by-robot", "--out", str(tmp_path / "x")]

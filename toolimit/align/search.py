@@ -144,8 +144,14 @@ class AlignmentResult:
         from it (with the scene's ``parameters``) replays the search's first run of that sample."""
         rng = np.random.default_rng([self.seed, candidate.index])
         draw_alignment_sample(
-            self.demo, self.keypoints, parameters, self.config, self.config.element_covariance(self.plane),
-            self.min_distance, rng, plane=self.plane,
+            self.demo,
+            self.keypoints,
+            parameters,
+            self.config,
+            self.config.element_covariance(self.plane),
+            self.min_distance,
+            rng,
+            plane=self.plane,
         )
         return rng
 
@@ -186,7 +192,13 @@ class SampleEvaluator:
     def draw(self, rng: np.random.Generator) -> AlignmentSample | None:
         """A sample from ``rng`` (the sample's own generator), None if its elements cannot be placed."""
         return draw_alignment_sample(
-            self.demo, self.keypoints, self.scene.parameters, self.config, self.covariance, self.min_distance, rng,
+            self.demo,
+            self.keypoints,
+            self.scene.parameters,
+            self.config,
+            self.covariance,
+            self.min_distance,
+            rng,
             plane=self.plane,
         )
 
@@ -350,8 +362,13 @@ def align(
     if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:
         previous_time = _restore(result, state, evaluator)
     # the search ends at the K-th candidate, usually long before the sample budget: count candidates
-    bar = tqdm(total=config.candidates, initial=len(result.candidates), desc=f"align {tool}/{world}",
-               unit="candidate", disable=not progress)
+    bar = tqdm(
+        total=config.candidates,
+        initial=len(result.candidates),
+        desc=f"align {tool}/{world}",
+        unit="candidate",
+        disable=not progress,
+    )
     last_save = time.perf_counter()
     chunks = _outcomes_in_order(evaluator, scene_factory, config, workers, first=result.samples_tried)
     with interruptible():
@@ -359,8 +376,11 @@ def align(
             with bar, contextlib.closing(chunks):  # closing the generator ends the worker processes
                 for outcomes in chunks:
                     enough = _merge(result, outcomes)
-                    bar.set_postfix(samples=f"{result.samples_tried}/{config.samples}",
-                                    rejected=result.samples_rejected, refresh=False)
+                    bar.set_postfix(
+                        samples=f"{result.samples_tried}/{config.samples}",
+                        rejected=result.samples_rejected,
+                        refresh=False,
+                    )
                     bar.update(len(result.candidates) - bar.n)
                     if enough:
                         break

@@ -24,8 +24,16 @@ from toolimit.errors import InputError, ToolimitError
 if TYPE_CHECKING:
     from toolimit.trajopt import PoseTargets
 
-COMMANDS = ("toolimit.cli.demo", "toolimit.cli.align", "toolimit.cli.replay", "toolimit.cli.trajopt",
-            "toolimit.cli.export", "toolimit.cli.learn", "toolimit.cli.evaluate", "toolimit.cli.run")
+COMMANDS = (
+    "toolimit.cli.demo",
+    "toolimit.cli.align",
+    "toolimit.cli.replay",
+    "toolimit.cli.trajopt",
+    "toolimit.cli.export",
+    "toolimit.cli.learn",
+    "toolimit.cli.evaluate",
+    "toolimit.cli.run",
+)
 
 
 class CliError(InputError):
@@ -51,8 +59,9 @@ def check_writable_folder(folder: Path, option: str) -> None:
         with tempfile.NamedTemporaryFile(dir=existing, prefix=".toolimit-write-check."):
             pass
     except OSError as error:
-        raise CliError(f"{option}: cannot write in {folder}: creating a file in {existing} fails "
-                       f"({error.strerror})") from None
+        raise CliError(
+            f"{option}: cannot write in {folder}: creating a file in {existing} fails ({error.strerror})"
+        ) from None
 
 
 def check_output_folder(folder: Path, option: str) -> None:
@@ -99,9 +108,11 @@ def check_count(option: str, value: int, minimum: int = 1) -> None:
 def add_frame_argument(parser: argparse.ArgumentParser) -> None:
     """``--frame``: the orientation convention of a poses file (see :func:`load_poses`)."""
     parser.add_argument(
-        "--frame", choices=("tool", "original-spade"), default="tool",
+        "--frame",
+        choices=("tool", "original-spade"),
+        default="tool",
         help="orientation convention of the poses: toolimit's tool frame (default), or the original code's "
-             "spade tip frame of the shared real recordings (converted to the tool frame)",
+        "spade tip frame of the shared real recordings (converted to the tool frame)",
     )
 
 

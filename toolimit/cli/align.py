@@ -39,25 +39,38 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
     parser.add_argument("--world", default="planar", help="planar or 3d (default: planar)")
-    parser.add_argument("--demo", required=True, type=Path, help="demonstration file (project .npz, real aligned .npz or estimator .pkl)")
+    parser.add_argument(
+        "--demo",
+        required=True,
+        type=Path,
+        help="demonstration file (project .npz, real aligned .npz or estimator .pkl)",
+    )
     parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES, help="sample budget (default: 20000)")
     parser.add_argument(
-        "--candidates", type=int, default=DEFAULT_CANDIDATES,
+        "--candidates",
+        type=int,
+        default=DEFAULT_CANDIDATES,
         help=f"stop after this many samples with a reward (default: {DEFAULT_CANDIDATES})",
     )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     parser.add_argument(
-        "--workers", type=int, default=None,
+        "--workers",
+        type=int,
+        default=None,
         help="worker processes (default: up to 4, one per CPU core); results do not depend on it",
     )
     parser.add_argument("--out", required=True, type=Path, help="output folder")
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument(
-        "--html", type=Path, default=None,
+        "--html",
+        type=Path,
+        default=None,
         help="3d world only: also save the best candidate's replay as a self-contained meshcat page (.html)",
     )
     parser.add_argument(
-        "--z-offset-std", type=float, default=None,
+        "--z-offset-std",
+        type=float,
+        default=None,
         help="spread of the sampled vertical offset p_z, m (default 0.1; the paper's 0.5 suits recordings "
         "whose heights are not measured from the ground)",
     )
@@ -109,20 +122,33 @@ def run(args: argparse.Namespace) -> int:
         print(f"found {checkpoint}: the search resumes from it if it was made with the same settings")
     try:
         result = align(
-            demo, args.tool, args.world, config, seed=args.seed, workers=workers, progress=not args.quiet,
-            checkpoint=checkpoint, clean=not args.no_clean,
+            demo,
+            args.tool,
+            args.world,
+            config,
+            seed=args.seed,
+            workers=workers,
+            progress=not args.quiet,
+            checkpoint=checkpoint,
+            clean=not args.no_clean,
         )
     except SearchInterrupted as stop:
         found = f"{stop.samples_tried} samples examined, {stop.candidates} candidate(s)"
         if stop.checkpoint is not None:
-            print(f"interrupted ({stop.signal_name}) after {found}: progress saved to {stop.checkpoint}; "
-                  "run the same command again to resume", file=sys.stderr)
+            print(
+                f"interrupted ({stop.signal_name}) after {found}: progress saved to {stop.checkpoint}; "
+                "run the same command again to resume",
+                file=sys.stderr,
+            )
         else:
             print(f"interrupted ({stop.signal_name}) before any sample finished: nothing was saved", file=sys.stderr)
         return stop.exit_code
     write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
     if result.cleaning is not None:
-        print(f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced")
+        print(
+            f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced "
+            f"({len(result.cleaning.head_replaced_frames)} of them with the head's position)"
+        )
     rejected = result.samples_rejected / max(result.samples_tried, 1)
     print(
         f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples "

@@ -61,8 +61,11 @@ def run_show(args: argparse.Namespace) -> int:
     except DemoError as error:  # `toolimit align` would refuse it the same way; --no-clean aligns it raw
         print(f"cleaned: not possible ({error})")
         return 0
-    print(f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced): {_motion(cleaned)}, "
-          f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}")
+    print(
+        f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced, "
+        f"{len(report.head_replaced_frames)} of them with the head's position): {_motion(cleaned)}, "
+        f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}"
+    )
     return 0
 
 

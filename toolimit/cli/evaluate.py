@@ -22,8 +22,9 @@ EVALUATION_JSON = "evaluation.json"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("evaluate", help="evaluate a learned policy over many seeds",
-                                   description=__doc__.splitlines()[0])
+    parser = subparsers.add_parser(
+        "evaluate", help="evaluate a learned policy over many seeds", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--policy", required=True, type=Path, help="`toolimit learn` output folder")
     parser.add_argument("--episodes", type=int, default=20, help="episodes per mode (default: 20)")
     parser.add_argument("--seed", type=int, default=1000, help="seed of the evaluation episodes (default: 1000)")
@@ -40,8 +41,14 @@ def evaluation_record(policy_dir: Path, episodes: int, seed: int) -> tuple[dict,
     model, task = load_policy(policy_dir)
     deterministic = evaluate(model, task, episodes, deterministic=True, seed=seed)
     stochastic = evaluate(model, task, episodes, deterministic=False, seed=seed)
-    record = {"tool": task.tool, "world": task.world, "robot": task.robot, "seed": seed,
-              **deterministic.record(), "stochastic": stochastic.record()}
+    record = {
+        "tool": task.tool,
+        "world": task.world,
+        "robot": task.robot,
+        "seed": seed,
+        **deterministic.record(),
+        "stochastic": stochastic.record(),
+    }
     return record, deterministic, task
 
 
@@ -56,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
     check_writable_folder(out.parent, "--out")
     record, _, _ = evaluation_record(args.policy, args.episodes, args.seed)
     save_json(out, record)
-    print(f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "
-          f"(stochastic) over {args.episodes} episodes; goal reward {record['goal_reward_mean']:.1f}; wrote {out}")
+    print(
+        f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "
+        f"(stochastic) over {args.episodes} episodes; goal reward {record['goal_reward_mean']:.1f}; wrote {out}"
+    )
     return 0

@@ -32,15 +32,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="retime a joint trajectory within a real robot's limits and write it (CSV + JSON) for open-loop execution",
         description=__doc__.splitlines()[0],
     )
-    parser.add_argument("--trajectory", required=True, type=Path, metavar="DIR",
-                        help="folder holding trajectory.npz (from `toolimit trajopt`)")
-    parser.add_argument("--robot", required=True,
-                        help=f"robot whose published limits apply ({', '.join(SUPPORTED_ROBOTS)})")
+    parser.add_argument(
+        "--trajectory",
+        required=True,
+        type=Path,
+        metavar="DIR",
+        help="folder holding trajectory.npz (from `toolimit trajopt`)",
+    )
+    parser.add_argument(
+        "--robot", required=True, help=f"robot whose published limits apply ({', '.join(SUPPORTED_ROBOTS)})"
+    )
     parser.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
     parser.add_argument("--rate", type=float, default=DEFAULT_RATE_HZ, help="command rate in Hz (default 1000)")
-    parser.add_argument("--subdivisions", type=int, default=DEFAULT_SUBDIVISIONS,
-                        help="pieces per step between optimised samples: more keeps closer to them at sharp turns, "
-                        f"and turns there more slowly (default {DEFAULT_SUBDIVISIONS})")
+    parser.add_argument(
+        "--subdivisions",
+        type=int,
+        default=DEFAULT_SUBDIVISIONS,
+        help="pieces per step between optimised samples: more keeps closer to them at sharp turns, "
+        f"and turns there more slowly (default {DEFAULT_SUBDIVISIONS})",
+    )
     parser.set_defaults(func=run)
 
 
@@ -48,14 +58,24 @@ def run(args: argparse.Namespace) -> int:
     published_limits(args.robot)  # an unsupported robot is refused before anything is read
     check_writable_folder(args.out, "--out")
     trajectory = load_trajectory(args.trajectory)
-    plan = export_trajectory(trajectory, args.robot, args.out, rate=args.rate, subdivisions=args.subdivisions,
-                             source=str(args.trajectory / TRAJECTORY_NPZ))
+    plan = export_trajectory(
+        trajectory,
+        args.robot,
+        args.out,
+        rate=args.rate,
+        subdivisions=args.subdivisions,
+        source=str(args.trajectory / TRAJECTORY_NPZ),
+    )
     ratios = ", ".join(f"{check.quantity} {check.ratio:.2f}" for check in plan.checks if check.quantity != "position")
     duration, optimised = plan.path.duration, plan.optimised_duration
-    print(f"retimed within {args.robot}'s limits: {duration:.3f} s against {optimised:.3f} s optimised "
-          f"({duration / optimised:.2f}x); the path stays within {plan.path.path_deviation:.4f} rad of every "
-          f"optimised sample")
+    print(
+        f"retimed within {args.robot}'s limits: {duration:.3f} s against {optimised:.3f} s optimised "
+        f"({duration / optimised:.2f}x); the path stays within {plan.path.path_deviation:.4f} rad of every "
+        f"optimised sample"
+    )
     print(f"peak |value| / limit: {ratios}; every position inside its limits")
-    print(f"wrote {args.out / TRAJECTORY_CSV} ({len(plan.samples.times)} samples at {args.rate:g} Hz) "
-          f"and {args.out / SUMMARY_JSON}")
+    print(
+        f"wrote {args.out / TRAJECTORY_CSV} ({len(plan.samples.times)} samples at {args.rate:g} Hz) "
+        f"and {args.out / SUMMARY_JSON}"
+    )
     return 0

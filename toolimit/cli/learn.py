@@ -25,21 +25,44 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | Non
     """The budget and learner flags shared by ``toolimit learn`` and ``toolimit run``."""
     from toolimit.learn.ppo import PRESETS
 
-    parser.add_argument("--timesteps", type=int, default=timesteps,
-                        help=f"PPO environment steps (default: {timesteps or '300000 planar, 1500000 3d'})")
+    parser.add_argument(
+        "--timesteps",
+        type=int,
+        default=timesteps,
+        help=f"PPO environment steps (default: {timesteps or '300000 planar, 1500000 3d'})",
+    )
     parser.add_argument("--envs", type=int, default=16, help="instances stepped together (default: 16)")
-    parser.add_argument("--preset", choices=sorted(PRESETS), default="authors",
-                        help="PPO settings: the authors' or the project's looser gradient clip (default: authors)")
-    parser.add_argument("--no-clone", action="store_true",
-                        help="no behaviour cloning: sparse-reward PPO from a random policy (learned std)")
-    parser.add_argument("--clone-rollouts", type=int, default=8,
-                        help="tracking-controller rollouts to clone (1 = the authors'; default: 8)")
-    parser.add_argument("--clone-noise", type=float, default=0.3,
-                        help="action noise of rollouts 2.. (fraction of the velocity limit), relabelled by the "
-                             "controller (default: 0.3)")
+    parser.add_argument(
+        "--preset",
+        choices=sorted(PRESETS),
+        default="authors",
+        help="PPO settings: the authors' or the project's looser gradient clip (default: authors)",
+    )
+    parser.add_argument(
+        "--no-clone",
+        action="store_true",
+        help="no behaviour cloning: sparse-reward PPO from a random policy (learned std)",
+    )
+    parser.add_argument(
+        "--clone-rollouts",
+        type=int,
+        default=8,
+        help="tracking-controller rollouts to clone (1 = the authors'; default: 8)",
+    )
+    parser.add_argument(
+        "--clone-noise",
+        type=float,
+        default=0.3,
+        help="action noise of rollouts 2.. (fraction of the velocity limit), relabelled by the "
+        "controller (default: 0.3)",
+    )
     parser.add_argument("--clone-steps", type=int, default=6000, help="cloning Adam steps (default: 6000)")
-    parser.add_argument("--value-steps", type=int, default=2000,
-                        help="Adam steps of the value network's warm-up after cloning (default: 2000)")
+    parser.add_argument(
+        "--value-steps",
+        type=int,
+        default=2000,
+        help="Adam steps of the value network's warm-up after cloning (default: 2000)",
+    )
     parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
 
@@ -48,24 +71,38 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
     """The LearningConfig of the flags of :func:`add_learning_arguments`; CliError for bad values."""
     from toolimit.learn.training import LearningConfig
 
-    for flag, value, low in (("--timesteps", args.timesteps, 0), ("--envs", args.envs, 1),
-                             ("--clone-rollouts", args.clone_rollouts, 1), ("--clone-steps", args.clone_steps, 0),
-                             ("--value-steps", args.value_steps, 0),
-                             ("--checkpoint-every", args.checkpoint_every, 1), ("--seed", args.seed, 0)):
+    for flag, value, low in (
+        ("--timesteps", args.timesteps, 0),
+        ("--envs", args.envs, 1),
+        ("--clone-rollouts", args.clone_rollouts, 1),
+        ("--clone-steps", args.clone_steps, 0),
+        ("--value-steps", args.value_steps, 0),
+        ("--checkpoint-every", args.checkpoint_every, 1),
+        ("--seed", args.seed, 0),
+    ):
         if value < low:
             raise CliError(f"{flag}: must be an integer >= {low}, got {value}")
     if not 0.0 <= args.clone_noise < float("inf"):
         raise CliError(f"--clone-noise: must be a finite number >= 0, got {args.clone_noise}")
-    return LearningConfig(timesteps=args.timesteps, envs=args.envs, preset=args.preset, clone=not args.no_clone,
-                          clone_rollouts=args.clone_rollouts, clone_noise=args.clone_noise,
-                          clone_steps=args.clone_steps, value_steps=args.value_steps,
-                          checkpoint_every=args.checkpoint_every, seed=args.seed,
-                          scene_kwargs=scene_kwargs)
+    return LearningConfig(
+        timesteps=args.timesteps,
+        envs=args.envs,
+        preset=args.preset,
+        clone=not args.no_clone,
+        clone_rollouts=args.clone_rollouts,
+        clone_noise=args.clone_noise,
+        clone_steps=args.clone_steps,
+        value_steps=args.value_steps,
+        checkpoint_every=args.checkpoint_every,
+        seed=args.seed,
+        scene_kwargs=scene_kwargs,
+    )
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("learn", help="learn the robot's policy: cloning then PPO (stage iv)",
-                                   description=__doc__.splitlines()[0])
+    parser = subparsers.add_parser(
+        "learn", help="learn the robot's policy: cloning then PPO (stage iv)", description=__doc__.splitlines()[0]
+    )
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--task", type=Path, help="a task file (task.npz)")
     source.add_argument("--alignment", type=Path, help="`toolimit align` output folder (with --trajectory)")
@@ -110,16 +147,25 @@ def run(args: argparse.Namespace) -> int:
         outcome = learn_policy(task, args.out, config, progress=not args.quiet)
     except KeyboardInterrupt as stop:  # interrupts.Interrupted (SIGINT, SIGTERM) or a plain Ctrl-C
         saved = (args.out / CHECKPOINT_STATE).is_file()
-        print("interrupted: " + (f"run the same command again to resume from the checkpoint in {args.out}" if saved
-              else "no checkpoint was written yet; the same command starts again"), file=sys.stderr)
+        print(
+            "interrupted: "
+            + (
+                f"run the same command again to resume from the checkpoint in {args.out}"
+                if saved
+                else "no checkpoint was written yet; the same command starts again"
+            ),
+            file=sys.stderr,
+        )
         return int(getattr(stop, "exit_code", 130))
     if args.rerun is not None:
         from toolimit.viz.rerun_learning import save_learning_recording
 
         save_learning_recording(args.out / CURVE_JSONL, args.rerun)
     record = outcome.record
-    print(f"{task.robot} {task.tool} ({task.world}): {record['env_steps']} env steps "
-          f"({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s "
-          f"({record['simulation_time_s']:.0f} s simulation); wrote {args.out / 'policy.zip'}. "
-          f"Next: toolimit evaluate --policy {args.out}")
+    print(
+        f"{task.robot} {task.tool} ({task.world}): {record['env_steps']} env steps "
+        f"({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s "
+        f"({record['simulation_time_s']:.0f} s simulation); wrote {args.out / 'policy.zip'}. "
+        f"Next: toolimit evaluate --policy {args.out}"
+    )
     return 0

@@ -47,9 +47,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--params", type=Path, help="JSON object of the scene's parameters")
     source.add_argument(
-        "--params-from-poses", action="store_true",
+        "--params-from-poses",
+        action="store_true",
         help="read the parameters from the poses file (the original aligned files' names: "
-             + ", ".join(ORIGINAL_PARAMETER_NAMES) + ")",
+        + ", ".join(ORIGINAL_PARAMETER_NAMES)
+        + ")",
     )
     parser.add_argument("--replays", type=int, default=10, help="replays, one batch (default: 10)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
@@ -104,8 +106,11 @@ def _params_from_poses(path: Path, specs) -> dict:
     """The scene parameters stored in an original aligned poses file, under the scenes' names."""
     wanted = {spec.name for spec in specs}
     with np.load(path) as arrays:
-        found = {ORIGINAL_PARAMETER_NAMES[key]: np.asarray(arrays[key], dtype=float)
-                 for key in arrays.files if ORIGINAL_PARAMETER_NAMES.get(key) in wanted}
+        found = {
+            ORIGINAL_PARAMETER_NAMES[key]: np.asarray(arrays[key], dtype=float)
+            for key in arrays.files
+            if ORIGINAL_PARAMETER_NAMES.get(key) in wanted
+        }
     missing = sorted(wanted - set(found))
     if missing:
         keys = sorted(key for key, name in ORIGINAL_PARAMETER_NAMES.items() if name in missing)
@@ -122,29 +127,46 @@ def run(args: argparse.Namespace) -> int:
     targets = load_poses(args.poses, args.frame)
     scene = make_scene(args.tool, args.world)
     if abs(targets.fps * scene.control_dt - 1.0) > 1e-6:
-        raise CliError(f"--poses: {args.poses} is at {targets.fps:g} fps; the scene steps at {1 / scene.control_dt:g} fps")
-    params = (_params_from_poses(args.poses, scene.parameters) if args.params_from_poses
-              else _params_from_json(args.params, scene.parameters))
+        raise CliError(
+            f"--poses: {args.poses} is at {targets.fps:g} fps; the scene steps at {1 / scene.control_dt:g} fps"
+        )
+    params = (
+        _params_from_poses(args.poses, scene.parameters)
+        if args.params_from_poses
+        else _params_from_json(args.params, scene.parameters)
+    )
     reason = scene.invalid_reason(params)
     if reason is not None:
         raise CliError(f"scene parameters: {reason}")
 
     rewards = replay(scene, params, np.random.default_rng(args.seed), targets.poses, args.replays)
     success = np.asarray(scene.is_success(), dtype=bool)
-    print(f"toolimit replay: {args.tool} {args.world}, {len(targets.positions)} frames x {args.replays} replays: "
-          f"goal reward mean {rewards.mean():.2f} (min {rewards.min():g}, max {rewards.max():g}), "
-          f"success rate {success.mean():.2f}")
+    print(
+        f"toolimit replay: {args.tool} {args.world}, {len(targets.positions)} frames x {args.replays} replays: "
+        f"goal reward mean {rewards.mean():.2f} (min {rewards.min():g}, max {rewards.max():g}), "
+        f"success rate {success.mean():.2f}"
+    )
     if args.json is not None:
-        save_json(args.json, {
-            "tool": args.tool, "world": args.world, "poses": str(args.poses), "frame": args.frame,
-            "params": {name: np.asarray(value).tolist() for name, value in params.items()},
-            "replays": args.replays, "seed": args.seed, "frames": len(targets.positions),
-            "goal_reward": rewards.tolist(), "goal_reward_mean": float(rewards.mean()),
-            "success_rate": float(success.mean()),
-        })
+        save_json(
+            args.json,
+            {
+                "tool": args.tool,
+                "world": args.world,
+                "poses": str(args.poses),
+                "frame": args.frame,
+                "params": {name: np.asarray(value).tolist() for name, value in params.items()},
+                "replays": args.replays,
+                "seed": args.seed,
+                "frames": len(targets.positions),
+                "goal_reward": rewards.tolist(),
+                "goal_reward_mean": float(rewards.mean()),
+                "success_rate": float(success.mean()),
+            },
+        )
     if args.html is not None:
         from toolimit.viz.meshcat_views import scene_replay_html
 
-        scene_replay_html(args.html, make_scene(args.tool, args.world), targets.poses, params,
-                          np.random.default_rng(args.seed))
+        scene_replay_html(
+            args.html, make_scene(args.tool, args.world), targets.poses, params, np.random.default_rng(args.seed)
+        )
     return 0

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, check_output_folder
 from toolimit.cli.learn import add_learning_arguments, learning_config
+from toolimit.cli.trajopt import parse_time_scales
 
 if TYPE_CHECKING:
     import numpy as np
@@ -34,26 +35,56 @@ RUN_JSON = "run.json"
 #: PPO steps by default, per world (measured: the planar spade succeeds after 300 k; the Panda
 #: spade's training success climbs from 0.03 to 1.0 between 0.5 M and 1.2 M steps).
 DEFAULT_TIMESTEPS = {"planar": 300_000, "3d": 1_500_000}
+#: Alignment candidates by default, per world: the robot's selection needs good ones to choose from.
+#: Measured on the 3D spade (spade_00, seed 0): the best robot replay of 5 candidates earns 6.9
+#: spheres, of 20 candidates 11.4 (the alignment takes 19 s for 20).
+DEFAULT_CANDIDATES = {"planar": 5, "3d": 20}
+#: Time scales the robot's selection tries, per world (``toolimit trajopt --time-scale``): in 3D the
+#: demonstration's own speed usually earns most (a slowed throw falls short of the box), slower
+#: scales help where the robot lags too much at its velocity limits.
+SELECTION_TIME_SCALES = {"planar": "1", "3d": "1,1.5,2"}
 #: Budgets of --quick: minutes on a laptop, for CI and first tries.
-QUICK = {"samples": 3000, "candidates": 3, "starts": 2, "timesteps": 2_000, "envs": 4, "clone_steps": 300,
-         "value_steps": 200, "clone_rollouts": 2, "episodes": 4}
+QUICK = {
+    "samples": 3000,
+    "candidates": 3,
+    "starts": 2,
+    "timesteps": 2_000,
+    "envs": 4,
+    "clone_steps": 300,
+    "value_steps": 200,
+    "clone_rollouts": 2,
+    "episodes": 4,
+}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("run", help="the whole pipeline: align, trajopt, learn, evaluate",
-                                   description=__doc__.splitlines()[0])
+    parser = subparsers.add_parser(
+        "run", help="the whole pipeline: align, trajopt, learn, evaluate", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
     parser.add_argument("--robot", required=True, help="robot model (panda, ur5, talos, planar3)")
     parser.add_argument("--demo", required=True, type=Path, help="demonstration file")
     parser.add_argument("--world", default="3d", help="3d or planar (default: 3d)")
     parser.add_argument("--out", required=True, type=Path, help="output folder (one sub-folder per stage)")
     parser.add_argument("--samples", type=int, default=20_000, help="alignment sample budget (default: 20000)")
-    parser.add_argument("--candidates", type=int, default=5, help="alignment candidates (default: 5)")
+    parser.add_argument(
+        "--candidates",
+        type=int,
+        default=None,
+        help=f"alignment candidates (default: {DEFAULT_CANDIDATES['planar']} planar, {DEFAULT_CANDIDATES['3d']} in 3D)",
+    )
+    parser.add_argument(
+        "--time-scale",
+        default=None,
+        help="time scales the robot's selection tries, as `toolimit trajopt --time-scale` (default: "
+        f"{SELECTION_TIME_SCALES['planar']} planar, {SELECTION_TIME_SCALES['3d']} in 3D)",
+    )
     parser.add_argument("--starts", type=int, default=8, help="trajopt base initialisations (default: 8)")
     parser.add_argument("--episodes", type=int, default=20, help="evaluation episodes (default: 20)")
     add_learning_arguments(parser, timesteps=None)
-    parser.add_argument("--quick", action="store_true",
-                        help=f"tiny budgets for a first try or CI (flags given explicitly win): {QUICK}")
+    parser.add_argument(
+        "--quick", action="store_true", help=f"tiny budgets for a first try or CI (flags given explicitly win): {QUICK}"
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run, budget_defaults={name: parser.get_default(name) for name in QUICK})
 
@@ -70,28 +101,97 @@ def run(args: argparse.Namespace) -> int:
                 setattr(args, name, value)
     if args.timesteps is None:
         args.timesteps = DEFAULT_TIMESTEPS[args.world]
+    if args.candidates is None:
+        args.candidates = DEFAULT_CANDIDATES[args.world]
     learning_config(args)  # checks the learning flags before any work
+    time_scale = args.time_scale or SELECTION_TIME_SCALES[args.world]
+    parse_time_scales(time_scale)
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
     check_output_folder(args.out, "--out")
     alignment, trajectory, learning = args.out / "alignment", args.out / "trajectory", args.out / "learning"
     quiet = ["--quiet"] if args.quiet else []
-    time_scale = "auto" if args.world == "3d" else "1"
     stages: list[tuple[str, Callable[[], bool], list[str]]] = [
-        ("alignment", lambda: _alignment_done(alignment),
-         ["align", "--tool", args.tool, "--world", args.world, "--demo", str(args.demo), "--out", str(alignment),
-          "--samples", str(args.samples), "--candidates", str(args.candidates), "--seed", str(args.seed), *quiet]),
-        ("trajectory", lambda: (trajectory / "trajectory.npz").is_file(),
-         ["trajopt", "--robot", args.robot, "--tool", args.tool, "--alignment", str(alignment), "--select-by-robot",
-          "--velocity-weight", "1e-4", "--time-scale", time_scale, "--starts", str(args.starts),
-          "--seed", str(args.seed), "--out", str(trajectory), *quiet]),
-        ("learning", lambda: (learning / "policy.zip").is_file() and (learning / "learning.json").is_file(),
-         ["learn", "--alignment", str(alignment), "--trajectory", str(trajectory), "--out", str(learning),
-          "--timesteps", str(args.timesteps), "--envs", str(args.envs), "--preset", args.preset,
-          "--clone-rollouts", str(args.clone_rollouts), "--clone-noise", str(args.clone_noise),
-          "--clone-steps", str(args.clone_steps), "--value-steps", str(args.value_steps),
-          "--checkpoint-every", str(args.checkpoint_every),
-          "--seed", str(args.seed), *(["--no-clone"] if args.no_clone else []), *quiet]),
+        (
+            "alignment",
+            lambda: _alignment_done(alignment),
+            [
+                "align",
+                "--tool",
+                args.tool,
+                "--world",
+                args.world,
+                "--demo",
+                str(args.demo),
+                "--out",
+                str(alignment),
+                "--samples",
+                str(args.samples),
+                "--candidates",
+                str(args.candidates),
+                "--seed",
+                str(args.seed),
+                *quiet,
+            ],
+        ),
+        (
+            "trajectory",
+            lambda: (trajectory / "trajectory.npz").is_file(),
+            [
+                "trajopt",
+                "--robot",
+                args.robot,
+                "--tool",
+                args.tool,
+                "--alignment",
+                str(alignment),
+                "--select-by-robot",
+                "--velocity-weight",
+                "1e-4",
+                "--time-scale",
+                time_scale,
+                "--starts",
+                str(args.starts),
+                "--seed",
+                str(args.seed),
+                "--out",
+                str(trajectory),
+                *quiet,
+            ],
+        ),
+        (
+            "learning",
+            lambda: (learning / "policy.zip").is_file() and (learning / "learning.json").is_file(),
+            [
+                "learn",
+                "--alignment",
+                str(alignment),
+                "--trajectory",
+                str(trajectory),
+                "--out",
+                str(learning),
+                "--timesteps",
+                str(args.timesteps),
+                "--envs",
+                str(args.envs),
+                "--preset",
+                args.preset,
+                "--clone-rollouts",
+                str(args.clone_rollouts),
+                "--clone-noise",
+                str(args.clone_noise),
+                "--clone-steps",
+                str(args.clone_steps),
+                "--value-steps",
+                str(args.value_steps),
+                "--checkpoint-every",
+                str(args.checkpoint_every),
+                "--seed",
+                str(args.seed),
+                *(["--no-clone"] if args.no_clone else []),
+                *quiet,
+            ],
+        ),
     ]
     times = _stage_times(args.out)
     for name, done, command in stages:
@@ -113,20 +213,28 @@ def run(args: argparse.Namespace) -> int:
     times["evaluation"] = time.perf_counter() - started
     _save_stage_times(args.out, times)
     learned = json.loads((learning / "learning.json").read_text())
-    record |= {"env_steps": learned["env_steps"], "wall_time_s": sum(times.values()), "stage_times_s": times,
-               "simulation_time_s": learned["simulation_time_s"], "learning_time_s": learned["learning_time_s"]}
+    record |= {
+        "env_steps": learned["env_steps"],
+        "wall_time_s": sum(times.values()),
+        "stage_times_s": times,
+        "simulation_time_s": learned["simulation_time_s"],
+        "learning_time_s": learned["learning_time_s"],
+    }
     from toolimit.artifacts import save_json
 
     save_json(args.out / EVALUATION_JSON, record)
     code = _export_rollout(args, evaluation.joint_positions[0], task, toolimit)
-    print(f"success rate {record['success_rate']:.2f} over {record['episodes']} episodes, goal reward "
-          f"{record['goal_reward_mean']:.1f}, {record['env_steps']} env steps, {record['wall_time_s']:.0f} s; "
-          f"wrote {args.out / EVALUATION_JSON}")
+    print(
+        f"success rate {record['success_rate']:.2f} over {record['episodes']} episodes, goal reward "
+        f"{record['goal_reward_mean']:.1f}, {record['env_steps']} env steps, {record['wall_time_s']:.0f} s; "
+        f"wrote {args.out / EVALUATION_JSON}"
+    )
     return code
 
 
-def _export_rollout(args: argparse.Namespace, joint_positions: np.ndarray, task: LearningTask,
-                    toolimit: Callable[[list[str]], int]) -> int:
+def _export_rollout(
+    args: argparse.Namespace, joint_positions: np.ndarray, task: LearningTask, toolimit: Callable[[list[str]], int]
+) -> int:
     """The policy's first deterministic evaluation episode, joints (H+1, N) rad, to
     OUT/policy_rollout (stage iii's format), exported by ``toolimit export`` to OUT/export for
     robots with published limits; the export's exit code."""
@@ -135,8 +243,10 @@ def _export_rollout(args: argparse.Namespace, joint_positions: np.ndarray, task:
 
     folder = save_rollout_trajectory(joint_positions, task, args.out / "policy_rollout")
     if args.robot not in SUPPORTED_ROBOTS:
-        print(f"[export] skipped: {args.robot} has no published acceleration and jerk limits "
-              f"(the policy's rollout is in {folder})")
+        print(
+            f"[export] skipped: {args.robot} has no published acceleration and jerk limits "
+            f"(the policy's rollout is in {folder})"
+        )
         return 0
     command = ["export", "--trajectory", str(folder), "--robot", args.robot, "--out", str(args.out / "export")]
     print(f"[export] toolimit {' '.join(command)}")
@@ -159,8 +269,10 @@ def _check_same_run(args: argparse.Namespace, folder: Path) -> None:
         found = {"tool": task.tool, "world": task.world, "robot": task.robot}
     for key, value in found.items():
         if value != getattr(args, key):
-            raise CliError(f"{folder} holds a finished stage for {key} {value!r}, not {getattr(args, key)!r}: "
-                           "choose another --out or remove that folder")
+            raise CliError(
+                f"{folder} holds a finished stage for {key} {value!r}, not {getattr(args, key)!r}: "
+                "choose another --out or remove that folder"
+            )
 
 
 def _alignment_done(folder: Path) -> bool:

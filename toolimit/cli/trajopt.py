@@ -27,7 +27,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from toolimit.robots import ROBOTS
 
     parser = subparsers.add_parser(
-        "trajopt", help="optimise a robot trajectory tracking the aligned tool motion (stage iii)",
+        "trajopt",
+        help="optimise a robot trajectory tracking the aligned tool motion (stage iii)",
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--robot", required=True, help=f"robot model ({', '.join(ROBOTS)})")
@@ -37,40 +38,59 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     source.add_argument("--poses", type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
     add_frame_argument(parser)
     parser.add_argument("--out", required=True, type=Path, help="output folder")
-    parser.add_argument("--time-scale", default="1", help="slow-down factor (>0) or 'auto' (default: 1)")
+    parser.add_argument(
+        "--time-scale",
+        default="1",
+        help="slow-down factor (>0; default: 1), or several comma-separated, or 'auto' (1,1.5,2,2.5,3,4,5): of "
+        "several, the smallest whose tracking error has a median under 1 cm, or with --select-by-robot the "
+        "one whose robot replay earns the most",
+    )
     parser.add_argument("--starts", type=int, default=8, help="base initialisations (default: 8)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the random starts beyond 8 (default: 0)")
     parser.add_argument(
-        "--init", choices=("hold", "rollout", "both"), default="both",
+        "--init",
+        choices=("hold", "rollout", "both"),
+        default="both",
         help="joint initialisation of every start: the rest pose held, a differential-IK rollout along the "
-             "targets, or both (default: both; the better result is kept)",
+        "targets, or both (default: both; the better result is kept)",
     )
-    parser.add_argument("--velocity-weight", type=float, default=0.01,
-                        help="w_v, weight of the joint velocities (rad/s)^2 against the pose error (default: 0.01)")
-    parser.add_argument("--posture-weight", type=float, default=0.0,
-                        help="w_p, weight of the joints' distance to the rest posture (rad)^2 (default: 0, off)")
     parser.add_argument(
-        "--select-by-robot", action="store_true",
+        "--velocity-weight",
+        type=float,
+        default=0.01,
+        help="w_v, weight of the joint velocities (rad/s)^2 against the pose error (default: 0.01)",
+    )
+    parser.add_argument(
+        "--posture-weight",
+        type=float,
+        default=0.0,
+        help="w_p, weight of the joints' distance to the rest posture (rad)^2 (default: 0, off)",
+    )
+    parser.add_argument(
+        "--select-by-robot",
+        action="store_true",
         help="with --alignment: track every alignment candidate (candidates.npz), replay the robot in each "
-             "candidate's scene and keep the one whose robot replay earns the most goal reward (the paper's "
-             "selection); also writes OUT/selection.json",
+        "candidate's scene and keep the one whose robot replay earns the most goal reward (the paper's "
+        "selection); also writes OUT/selection.json",
     )
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
 
-def _time_scale(text: str) -> float | None:
-    """None for 'auto', else a positive float."""
+def parse_time_scales(text: str) -> tuple[float, ...]:
+    """The scales of --time-scale: 'auto' is ``TIME_SCALE_GRID``, else comma-separated positive numbers."""
+    from toolimit.trajopt import TIME_SCALE_GRID
+
     if text == "auto":
-        return None
+        return TIME_SCALE_GRID
     try:
-        value = float(text)
+        values = tuple(float(part) for part in text.split(","))
     except ValueError:
-        raise CliError(f"--time-scale: expected a positive number or 'auto', got {text!r}") from None
-    if not value > 0 or value != value or value == float("inf"):
-        raise CliError(f"--time-scale: must be a positive finite number, got {text!r}")
-    return value
+        raise CliError(f"--time-scale: expected positive numbers (comma-separated) or 'auto', got {text!r}") from None
+    if not all(0 < value < float("inf") for value in values):
+        raise CliError(f"--time-scale: every scale must be a positive finite number, got {text!r}")
+    return values
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     check_choice("--tool", args.tool, sorted(TOOLS), "tool")
     check_count("--starts", args.starts)
     check_count("--seed", args.seed, minimum=0)
-    scale = _time_scale(args.time_scale)
+    scales = parse_time_scales(args.time_scale)
     for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
         if not (value >= 0 and value < float("inf")):
             raise CliError(f"{flag}: must be a finite number >= 0, got {value}")
@@ -112,19 +132,21 @@ def run(args: argparse.Namespace) -> int:
     robot = make_robot(args.robot, tool=args.tool)
     rng = np.random.default_rng(args.seed)
     initialisations = ("hold", "rollout") if args.init == "both" else (args.init,)
-    options = TrackOptions(weights=TrackingWeights(velocity=args.velocity_weight, posture=args.posture_weight), starts=args.starts,
-                           time_scale=scale or 1.0, initialisations=initialisations, progress=not args.quiet)
-    def solve(robot, targets, options, rng):
-        if scale is None:
-            return choose_time_scale(robot, targets, options, rng=rng)
-        return track(robot, targets, options, rng=rng)
-
+    options = TrackOptions(
+        weights=TrackingWeights(velocity=args.velocity_weight, posture=args.posture_weight),
+        starts=args.starts,
+        time_scale=scales[0],
+        initialisations=initialisations,
+        progress=not args.quiet,
+    )
     if args.select_by_robot:
-        targets, result = _select_by_robot(args, robot, options, solve)
+        targets, result = _select_by_robot(args, robot, options, scales)
         if result is None:
             return 1
+    elif len(scales) > 1:
+        result = choose_time_scale(robot, targets, options, grid=scales, rng=rng)
     else:
-        result = solve(robot, targets, options, rng)
+        result = track(robot, targets, options, rng=rng)
     result.save(args.out)
     if args.rerun is not None:
         from toolimit.viz.rerun_trajopt import save_trajectory_recording
@@ -132,9 +154,12 @@ def run(args: argparse.Namespace) -> int:
         save_trajectory_recording(result, robot, args.rerun, targets.positions)
     print(f"{args.robot}: {result.describe()}")
     if result.upside_down:
-        print(f"note: the {args.tool} is tracked upside down (median rotation error "
-              f"{np.degrees(np.median(result.rotation_error)):.0f} deg): its position follows the targets, its "
-              "orientation does not (trajectory.json has the error at every step)", file=sys.stderr)
+        print(
+            f"note: the {args.tool} is tracked upside down (median rotation error "
+            f"{np.degrees(np.median(result.rotation_error)):.0f} deg): its position follows the targets, its "
+            "orientation does not (trajectory.json has the error at every step)",
+            file=sys.stderr,
+        )
     written = f"wrote {args.out / 'trajectory.npz'} and {args.out / 'trajectory.json'}"
     if args.robot in SUPPORTED_ROBOTS:
         print(f"{written}; next: toolimit export --trajectory {args.out} --robot {args.robot} --out {args.out}_export")
@@ -143,9 +168,9 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _select_by_robot(args: argparse.Namespace, robot, options, solve):
-    """Track and replay every candidate of ``args.alignment``; (targets, result) of the best, or
-    (None, None) after saying why no candidate's robot replay earned a reward."""
+def _select_by_robot(args: argparse.Namespace, robot, options, time_scales: tuple[float, ...]):
+    """Track and replay every candidate of ``args.alignment`` at each of ``time_scales``; (targets,
+    result) of the best, or (None, None) after saying why no candidate's robot replay earned a reward."""
     from toolimit.align.outputs import CANDIDATES_NPZ
     from toolimit.artifacts import save_json
     from toolimit.trajopt.selection import load_candidates, select_by_robot_execution
@@ -153,8 +178,9 @@ def _select_by_robot(args: argparse.Namespace, robot, options, solve):
     tool, world, candidates = load_candidates(args.alignment / CANDIDATES_NPZ)
     if tool != args.tool:
         raise CliError(f"--tool: the alignment in {args.alignment} is for the {tool}, not the {args.tool}")
-    selection = select_by_robot_execution(robot, candidates, tool, world, options, solve, seed=args.seed,
-                                          progress=not args.quiet)
+    selection = select_by_robot_execution(
+        robot, candidates, tool, world, options, seed=args.seed, progress=not args.quiet, time_scales=time_scales
+    )
     save_json(args.out / "selection.json", selection.record(candidates))
     for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):
         if trajectory is None:
@@ -164,6 +190,8 @@ def _select_by_robot(args: argparse.Namespace, robot, options, solve):
     if selection.best is None:
         print(f"no candidate's robot replay earned a goal reward; wrote {args.out / 'selection.json'}", file=sys.stderr)
         return None, None
-    print(f"selected candidate {selection.best} (alignment reward "
-          f"{candidates[selection.best].alignment_reward:.1f}, robot reward {selection.robot_rewards[selection.best]:.1f})")
+    print(
+        f"selected candidate {selection.best} (alignment reward "
+        f"{candidates[selection.best].alignment_reward:.1f}, robot reward {selection.robot_rewards[selection.best]:.1f})"
+    )
     return candidates[selection.best].targets, selection.trajectories[selection.best]

@@ -66,8 +66,12 @@ class _ArraysOnlyUnpickler(pickle.Unpickler):
     """Builds numpy arrays and plain containers; any other class is refused before it is imported."""
 
     def find_class(self, module: str, name: str) -> Any:
-        module = {"numpy.core.multiarray": "numpy._core.multiarray", "numpy.core.numeric": "numpy._core.numeric",
-                  "copy_reg": "copyreg", "__builtin__": "builtins"}.get(module, module)
+        module = {
+            "numpy.core.multiarray": "numpy._core.multiarray",
+            "numpy.core.numeric": "numpy._core.numeric",
+            "copy_reg": "copyreg",
+            "__builtin__": "builtins",
+        }.get(module, module)
         if (module, name) not in _ALLOWED_CLASSES:
             raise pickle.UnpicklingError(f"refusing to load {module}.{name} (only numpy arrays are allowed)")
         return super().find_class(module, name)

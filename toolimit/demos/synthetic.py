@@ -190,8 +190,13 @@ def _spade(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable, 
         "carry": [carry_start_frame, carry_end_frame],
         "dump": [carry_end_frame, dump_end_frame],
     }
-    params = {"scoop_height": z_entry, "push_length": push, "carry_height": z_carry, "carry_length": carry,
-              "dump_height": dump_height}
+    params = {
+        "scoop_height": z_entry,
+        "push_length": push,
+        "carry_height": z_carry,
+        "carry_length": carry,
+        "dump_height": dump_height,
+    }
     return knots, lambda q: hand_tool_points(q, L), events, params
 
 
@@ -262,8 +267,14 @@ def _hammer(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable,
     knots.append(_knot(f, rest))
     f += _frames(rng, 0.2, 0.35, fps)
     knots.append(_knot(f, rest))
-    params = {"nail_height": float(nail[2]), "strikes": n_strikes, "impact_speed_min": min(speeds),
-              "impact_speed_max": max(speeds), "raise_height_min": min(raises), "raise_height_max": max(raises)}
+    params = {
+        "nail_height": float(nail[2]),
+        "strikes": n_strikes,
+        "impact_speed_min": min(speeds),
+        "impact_speed_max": max(speeds),
+        "raise_height_min": min(raises),
+        "raise_height_max": max(raises),
+    }
     return knots, lambda q: hand_tool_points(q, L), {"impacts": impacts}, params
 
 
@@ -337,8 +348,14 @@ def _scythe(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable,
         inward = np.stack([-np.cos(b) * np.cos(theta), -np.cos(b) * np.sin(theta), np.sin(b)], axis=1)
         return head, head + L * inward
 
-    params = {"cut_height": z_cut, "radius": radius, "arc": arc, "sweeps": n_sweeps,
-              "peak_speed_min": min(peak_speed[:n_sweeps]), "peak_speed_max": max(peak_speed[:n_sweeps])}
+    params = {
+        "cut_height": z_cut,
+        "radius": radius,
+        "arc": arc,
+        "sweeps": n_sweeps,
+        "peak_speed_min": min(peak_speed[:n_sweeps]),
+        "peak_speed_max": max(peak_speed[:n_sweeps]),
+    }
     return knots, points, {"sweeps": sweeps}, params
 
 

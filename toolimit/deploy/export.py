@@ -68,16 +68,22 @@ class ExportPlan:
         return self.trajectory.dt * (len(self.trajectory.q) - 1)
 
 
-def plan_export(trajectory: JointTrajectory, limits: JointLimits, rate: float = DEFAULT_RATE_HZ,
-                subdivisions: int = DEFAULT_SUBDIVISIONS) -> ExportPlan:
+def plan_export(
+    trajectory: JointTrajectory,
+    limits: JointLimits,
+    rate: float = DEFAULT_RATE_HZ,
+    subdivisions: int = DEFAULT_SUBDIVISIONS,
+) -> ExportPlan:
     """Retime ``trajectory`` within ``limits`` (:func:`toolimit.deploy.retime.retime`) and sample it at ``rate`` Hz.
 
     Raises :class:`PathOutsideLimits` for a sample outside the position limits, ValueError for
     mismatched joints or a bad rate.
     """
     if tuple(trajectory.joint_names) != limits.joint_names:
-        raise InputError(f"trajectory joints {list(trajectory.joint_names)} do not match "
-                         f"{limits.robot}'s joints {list(limits.joint_names)}")
+        raise InputError(
+            f"trajectory joints {list(trajectory.joint_names)} do not match "
+            f"{limits.robot}'s joints {list(limits.joint_names)}"
+        )
     if not (math.isfinite(rate) and rate > 0):
         raise InputError(f"rate must be a positive number of Hz, got {rate}")
     path = retime(trajectory.q, trajectory.dt, limits, subdivisions)
@@ -91,13 +97,25 @@ def plan_export(trajectory: JointTrajectory, limits: JointLimits, rate: float = 
 
 def _csv(times: np.ndarray, positions: np.ndarray, joint_names: tuple[str, ...]) -> str:
     buffer = io.StringIO()
-    np.savetxt(buffer, np.column_stack([times, positions]), delimiter=",", fmt="%.12f",
-               header=",".join(("time_s",) + tuple(joint_names)), comments="")
+    np.savetxt(
+        buffer,
+        np.column_stack([times, positions]),
+        delimiter=",",
+        fmt="%.12f",
+        header=",".join(("time_s",) + tuple(joint_names)),
+        comments="",
+    )
     return buffer.getvalue()
 
 
-def export_trajectory(trajectory: JointTrajectory, robot: str, out_dir: str | Path, rate: float = DEFAULT_RATE_HZ,
-                      subdivisions: int = DEFAULT_SUBDIVISIONS, source: str | None = None) -> ExportPlan:
+def export_trajectory(
+    trajectory: JointTrajectory,
+    robot: str,
+    out_dir: str | Path,
+    rate: float = DEFAULT_RATE_HZ,
+    subdivisions: int = DEFAULT_SUBDIVISIONS,
+    source: str | None = None,
+) -> ExportPlan:
     """Retime ``trajectory`` within ``robot``'s published limits and write the CSV and JSON to ``out_dir``.
 
     Raises :class:`PathOutsideLimits` (nothing written) if a path sample is outside a position
@@ -117,9 +135,12 @@ def export_trajectory(trajectory: JointTrajectory, robot: str, out_dir: str | Pa
         "retiming": METHOD,
         "limits": plan.limits.as_dict(),
         "checks": {check.quantity: check.as_dict() for check in plan.checks},
-        "base": {"x_m": float(trajectory.base[0]), "y_m": float(trajectory.base[1]),
-                 "yaw_rad": float(trajectory.base[2]),
-                 "frame": "world; place the robot base here before execution"},
+        "base": {
+            "x_m": float(trajectory.base[0]),
+            "y_m": float(trajectory.base[1]),
+            "yaw_rad": float(trajectory.base[2]),
+            "frame": "world; place the robot base here before execution",
+        },
         "files": {"csv": TRAJECTORY_CSV},
         "source": source,
     }

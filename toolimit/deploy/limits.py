@@ -105,14 +105,24 @@ class QuantityCheck:
     def describe(self) -> str:
         unit = UNITS[self.quantity]
         if self.quantity == "position":
-            return (f"{self.joint} position {self.value:.6g} {unit} at t = {self.time_s:.4f} s is outside its limit "
-                    f"{self.limit:.6g} {unit} (by {self.ratio:.3g} {unit})")
-        return (f"{self.joint} {self.quantity} {self.value:.6g} {unit} at t = {self.time_s:.4f} s exceeds the limit "
-                f"+-{self.limit:.6g} {unit} ({self.ratio:.3g} times the limit)")
+            return (
+                f"{self.joint} position {self.value:.6g} {unit} at t = {self.time_s:.4f} s is outside its limit "
+                f"{self.limit:.6g} {unit} (by {self.ratio:.3g} {unit})"
+            )
+        return (
+            f"{self.joint} {self.quantity} {self.value:.6g} {unit} at t = {self.time_s:.4f} s exceeds the limit "
+            f"+-{self.limit:.6g} {unit} ({self.ratio:.3g} times the limit)"
+        )
 
     def as_dict(self) -> dict:
-        return {"passed": self.passed, "worst_joint": self.joint, "time_s": self.time_s, "value": self.value,
-                "limit": self.limit, ("outside_by_rad" if self.quantity == "position" else "max_ratio"): self.ratio}
+        return {
+            "passed": self.passed,
+            "worst_joint": self.joint,
+            "time_s": self.time_s,
+            "value": self.value,
+            "limit": self.limit,
+            ("outside_by_rad" if self.quantity == "position" else "max_ratio"): self.ratio,
+        }
 
 
 def check_samples(limits: JointLimits, times: np.ndarray, samples: dict[str, np.ndarray]) -> list[QuantityCheck]:
@@ -135,6 +145,9 @@ def check_samples(limits: JointLimits, times: np.ndarray, samples: dict[str, np.
             limit = float(bound[j])
             ratio = float(ratios[k, j])
             passed = ratio <= 1.0
-        checks.append(QuantityCheck(quantity, passed, ratio, limits.joint_names[j], float(times[k]),
-                                    float(values[k, j]), float(limit)))
+        checks.append(
+            QuantityCheck(
+                quantity, passed, ratio, limits.joint_names[j], float(times[k]), float(values[k, j]), float(limit)
+            )
+        )
     return checks

@@ -69,8 +69,12 @@ class SampledTrajectory:
     jerk: np.ndarray
 
     def as_dict(self) -> dict[str, np.ndarray]:
-        return {"position": self.position, "velocity": self.velocity,
-                "acceleration": self.acceleration, "jerk": self.jerk}
+        return {
+            "position": self.position,
+            "velocity": self.velocity,
+            "acceleration": self.acceleration,
+            "jerk": self.jerk,
+        }
 
 
 @dataclass(frozen=True)
@@ -147,8 +151,9 @@ def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int = DE
         raise ValueError(f"subdivisions must be a positive integer, got {subdivisions}")
     check_path_positions(q, dt, limits)
     fractions = np.arange(subdivisions) / subdivisions
-    polyline = np.concatenate([(q[:-1, None] + fractions[:, None] * np.diff(q, axis=0)[:, None]).reshape(-1, q.shape[1]),
-                               q[-1:]])
+    polyline = np.concatenate(
+        [(q[:-1, None] + fractions[:, None] * np.diff(q, axis=0)[:, None]).reshape(-1, q.shape[1]), q[-1:]]
+    )
     control = np.concatenate([np.repeat(q[:1], DEGREE - 1, axis=0), polyline, np.repeat(q[-1:], DEGREE - 1, axis=0)])
     bounds = (limits.velocity, limits.acceleration, limits.jerk)
     spans = np.full(len(control) - DEGREE, dt / subdivisions)
@@ -162,11 +167,16 @@ def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int = DE
         worst = max(_ratios(spline, order, bound).max() ** (1.0 / order) for order, bound in enumerate(bounds, 1))
         spans = spans * max(1.0, worst) * (1.0 + _HEADROOM)
     spline = _spline(control, spans)
-    greville = np.array([spline.t[i + 1: i + 1 + DEGREE].mean() for i in range(len(control))])
-    at_samples = greville[DEGREE - 1: DEGREE - 1 + len(polyline): subdivisions]
+    greville = np.array([spline.t[i + 1 : i + 1 + DEGREE].mean() for i in range(len(control))])
+    at_samples = greville[DEGREE - 1 : DEGREE - 1 + len(polyline) : subdivisions]
     deviation = np.abs(spline(at_samples) - q).max()
-    return RetimedPath(spline=spline, duration=float(spline.t[-1]), path_deviation=float(deviation),
-                       lowest=q.min(axis=0), highest=q.max(axis=0))
+    return RetimedPath(
+        spline=spline,
+        duration=float(spline.t[-1]),
+        path_deviation=float(deviation),
+        lowest=q.min(axis=0),
+        highest=q.max(axis=0),
+    )
 
 
 def _spline(control: np.ndarray, spans: np.ndarray) -> BSpline:

@@ -20,6 +20,15 @@ from toolimit.learn.vec_env import BatchedTaskVecEnv
 register_environments()
 
 __all__ = [
-    "BatchedTaskVecEnv", "LearningTask", "TaskFileError", "TaskSimulator", "ToolUseEnv", "env_id",
-    "register_environments", "shipped_task", "shipped_tasks", "task_from_pipeline", "task_from_trajectory",
+    "BatchedTaskVecEnv",
+    "LearningTask",
+    "TaskFileError",
+    "TaskSimulator",
+    "ToolUseEnv",
+    "env_id",
+    "register_environments",
+    "shipped_task",
+    "shipped_tasks",
+    "task_from_pipeline",
+    "task_from_trajectory",
 ]

@@ -51,8 +51,14 @@ class Demonstrations:
     env_steps: int
 
 
-def collect_demonstrations(task: LearningTask, rollouts: int = 1, action_noise: float = 0.0, gamma: float = 0.999,
-                           seed: int = 0, scene_kwargs: dict[str, Any] | None = None) -> Demonstrations:
+def collect_demonstrations(
+    task: LearningTask,
+    rollouts: int = 1,
+    action_noise: float = 0.0,
+    gamma: float = 0.999,
+    seed: int = 0,
+    scene_kwargs: dict[str, Any] | None = None,
+) -> Demonstrations:
     """Roll the tracking controller out ``rollouts`` times at once (one batched scene).
 
     Rollout 0 executes the controller's actions exactly (the authors' data); the others execute them
@@ -79,7 +85,9 @@ def collect_demonstrations(task: LearningTask, rollouts: int = 1, action_noise: 
         observations=np.concatenate(np.swapaxes(np.array(observations), 0, 1)).astype(np.float32),
         actions=np.concatenate(np.swapaxes(np.array(actions), 0, 1)).astype(np.float32),
         returns=np.concatenate(returns.T).astype(np.float32),
-        goal_rewards=goal, successes=simulator.is_success(), env_steps=rollouts * simulator.t,
+        goal_rewards=goal,
+        successes=simulator.is_success(),
+        env_steps=rollouts * simulator.t,
     )
 
 
@@ -126,8 +134,16 @@ class CloningReport:
     value_loss_end: float
 
 
-def clone(policy: ActorCriticPolicy, demonstrations: Demonstrations, steps: int = 6000, learning_rate: float = 1e-4,
-          value_steps: int = 2000, batch_size: int = 512, seed: int = 0, progress: bool = True) -> CloningReport:
+def clone(
+    policy: ActorCriticPolicy,
+    demonstrations: Demonstrations,
+    steps: int = 6000,
+    learning_rate: float = 1e-4,
+    value_steps: int = 2000,
+    batch_size: int = 512,
+    seed: int = 0,
+    progress: bool = True,
+) -> CloningReport:
     """Fit the policy's action mean to the demonstrations (Adam, the authors' 6,000 steps at 1e-4),
     then warm the value network up on their returns (``value_steps``, same optimiser settings).
 
@@ -151,14 +167,23 @@ def clone(policy: ActorCriticPolicy, demonstrations: Demonstrations, steps: int 
 
     size = len(observations)
     action_losses = _fit(actor, action_loss, size, batch_size, steps, learning_rate, generator, progress, "cloning")
-    value_losses = _fit(critic, value_loss, size, batch_size, value_steps, learning_rate, generator, progress,
-                        "value warm-up")
+    value_losses = _fit(
+        critic, value_loss, size, batch_size, value_steps, learning_rate, generator, progress, "value warm-up"
+    )
     return CloningReport(action_losses[0], action_losses[-1], value_losses[0], value_losses[-1])
 
 
-def _fit(parameters: list[torch.nn.Parameter], loss_of: Callable[[torch.Tensor | slice], torch.Tensor], size: int,
-         batch_size: int, steps: int, learning_rate: float, generator: torch.Generator, progress: bool,
-         description: str) -> list[float]:
+def _fit(
+    parameters: list[torch.nn.Parameter],
+    loss_of: Callable[[torch.Tensor | slice], torch.Tensor],
+    size: int,
+    batch_size: int,
+    steps: int,
+    learning_rate: float,
+    generator: torch.Generator,
+    progress: bool,
+    description: str,
+) -> list[float]:
     """Minimise ``loss_of(rows)`` over ``parameters`` for ``steps`` Adam steps on minibatches of
     ``batch_size`` of ``size`` rows (all rows if fewer); the whole-data loss before and after."""
     optimiser = torch.optim.Adam(parameters, lr=learning_rate)

@@ -51,8 +51,9 @@ def action_space(simulator: TaskSimulator) -> gym.spaces.Box:
     return gym.spaces.Box(-1.0, 1.0, shape=(simulator.n_joints,), dtype=np.float32)
 
 
-def resolve_task(task: LearningTask | str | os.PathLike[str] | None, tool: str, world: str,
-                 robot: str | None) -> LearningTask:
+def resolve_task(
+    task: LearningTask | str | os.PathLike[str] | None, tool: str, world: str, robot: str | None
+) -> LearningTask:
     """The task an environment starts from: ``task`` itself, a task file, or the shipped task of
     (tool, world, robot). Raises ValueError if a given task does not match tool and world."""
     from toolimit.learn.shipped import shipped_task
@@ -72,9 +73,14 @@ class ToolUseEnv(gym.Env):
 
     metadata: dict[str, Any] = {"render_modes": []}
 
-    def __init__(self, tool: str = "spade", world: str = "3d", robot: str | None = None,
-                 task: LearningTask | str | os.PathLike[str] | None = None,
-                 scene_kwargs: dict[str, Any] | None = None):
+    def __init__(
+        self,
+        tool: str = "spade",
+        world: str = "3d",
+        robot: str | None = None,
+        task: LearningTask | str | os.PathLike[str] | None = None,
+        scene_kwargs: dict[str, Any] | None = None,
+    ):
         self.task = resolve_task(task, tool, world, robot)
         self.simulator = TaskSimulator(self.task, batch_size=1, scene_kwargs=scene_kwargs)
         self.observation_space = observation_space(self.simulator)
@@ -103,5 +109,9 @@ def register_environments() -> None:
         for world in ENV_WORLDS:
             name = env_id(tool, world)
             if name not in gym.registry:
-                gym.register(name, entry_point="toolimit.learn.env:ToolUseEnv",
-                             kwargs={"tool": tool, "world": world}, disable_env_checker=False)
+                gym.register(
+                    name,
+                    entry_point="toolimit.learn.env:ToolUseEnv",
+                    kwargs={"tool": tool, "world": world},
+                    disable_env_checker=False,
+                )

@@ -40,14 +40,23 @@ class Evaluation:
     def record(self) -> dict[str, Any]:
         """JSON-ready summary."""
         return {
-            "deterministic": self.deterministic, "episodes": len(self.successes),
-            "success_rate": float(np.mean(self.successes)), "goal_reward_mean": float(np.mean(self.goal_rewards)),
-            "goal_reward": self.goal_rewards.tolist(), "return_mean": float(np.mean(self.returns)),
+            "deterministic": self.deterministic,
+            "episodes": len(self.successes),
+            "success_rate": float(np.mean(self.successes)),
+            "goal_reward_mean": float(np.mean(self.goal_rewards)),
+            "goal_reward": self.goal_rewards.tolist(),
+            "return_mean": float(np.mean(self.returns)),
         }
 
 
-def evaluate(model: BaseAlgorithm, task: LearningTask, episodes: int = 20, deterministic: bool = True,
-             seed: int = 1000, scene_kwargs: dict[str, Any] | None = None) -> Evaluation:
+def evaluate(
+    model: BaseAlgorithm,
+    task: LearningTask,
+    episodes: int = 20,
+    deterministic: bool = True,
+    seed: int = 1000,
+    scene_kwargs: dict[str, Any] | None = None,
+) -> Evaluation:
     """Roll ``model``'s policy out for ``episodes`` episodes of ``task`` (one batch, seeded)."""
     env = BatchedTaskVecEnv(task, episodes, seed=seed, scene_kwargs=scene_kwargs)
     observation = env.reset()
@@ -62,8 +71,13 @@ def evaluate(model: BaseAlgorithm, task: LearningTask, episodes: int = 20, deter
             joints.append(np.array([info["terminal_joints"] for info in infos]))
             break
         joints.append(env.simulator.q.copy())
-    return Evaluation(deterministic, np.array([info["goal_reward"] for info in infos]),
-                      np.array([info["is_success"] for info in infos]), returns, np.stack(joints, axis=1))
+    return Evaluation(
+        deterministic,
+        np.array([info["goal_reward"] for info in infos]),
+        np.array([info["is_success"] for info in infos]),
+        returns,
+        np.stack(joints, axis=1),
+    )
 
 
 def save_rollout_trajectory(joint_positions: np.ndarray, task: LearningTask, directory: str | Path) -> Path:
@@ -74,6 +88,12 @@ def save_rollout_trajectory(joint_positions: np.ndarray, task: LearningTask, dir
     if q.ndim != 2 or q.shape[1] != len(task.joint_names):
         raise ValueError(f"joint_positions must be (H+1, {len(task.joint_names)}), got {q.shape}")
     directory = Path(directory)
-    save_npz(directory / TRAJECTORY_NPZ, q=q, v=np.diff(q, axis=0) / task.control_dt, base=task.base,
-             joint_names=np.array(task.joint_names), dt=np.float64(task.control_dt))
+    save_npz(
+        directory / TRAJECTORY_NPZ,
+        q=q,
+        v=np.diff(q, axis=0) / task.control_dt,
+        base=task.base,
+        joint_names=np.array(task.joint_names),
+        dt=np.float64(task.control_dt),
+    )
     return directory

@@ -81,11 +81,23 @@ def make_ppo(env: BatchedTaskVecEnv, settings: PpoSettings, seed: int = 0, learn
     std = authors_action_std(velocity_limit)
     n_steps = settings.episodes_per_update * env.simulator.horizon
     model = PPO(
-        "MlpPolicy", env, learning_rate=settings.learning_rate, n_steps=n_steps,
-        batch_size=max(1, n_steps * env.num_envs // settings.minibatches), n_epochs=settings.n_epochs,
-        gamma=settings.gamma, gae_lambda=settings.gae_lambda, clip_range=settings.clip_range,
-        normalize_advantage=settings.normalize_advantage, ent_coef=settings.ent_coef, vf_coef=settings.vf_coef,
-        max_grad_norm=settings.max_grad_norm, target_kl=settings.target_kl, seed=seed, device="cpu", verbose=0,
+        "MlpPolicy",
+        env,
+        learning_rate=settings.learning_rate,
+        n_steps=n_steps,
+        batch_size=max(1, n_steps * env.num_envs // settings.minibatches),
+        n_epochs=settings.n_epochs,
+        gamma=settings.gamma,
+        gae_lambda=settings.gae_lambda,
+        clip_range=settings.clip_range,
+        normalize_advantage=settings.normalize_advantage,
+        ent_coef=settings.ent_coef,
+        vf_coef=settings.vf_coef,
+        max_grad_norm=settings.max_grad_norm,
+        target_kl=settings.target_kl,
+        seed=seed,
+        device="cpu",
+        verbose=0,
         policy_kwargs={"net_arch": {"pi": [400, 300], "vf": [400, 300]}, "activation_fn": torch.nn.Tanh},
     )
     fix_action_std(model.policy, std)
@@ -138,9 +150,13 @@ def save_checkpoint(model: PPO, directory: Path) -> None:
     """Write ``checkpoint.zip`` (SB3: parameters, optimiser) and ``checkpoint.json`` (steps done,
     the environment's generator state before its last reset, torch's random state) atomically."""
     env: BatchedTaskVecEnv = model.get_env()  # type: ignore[assignment]
-    state = {"num_timesteps": int(model.num_timesteps), "env_rng": env.rng_state_at_reset,
-             "torch_rng": torch.get_rng_state().tolist(),
-             "numpy_rng": _numpy_global_state(), "learn_std": bool(model.policy.log_std.requires_grad)}
+    state = {
+        "num_timesteps": int(model.num_timesteps),
+        "env_rng": env.rng_state_at_reset,
+        "torch_rng": torch.get_rng_state().tolist(),
+        "numpy_rng": _numpy_global_state(),
+        "learn_std": bool(model.policy.log_std.requires_grad),
+    }
     with atomic_path(directory / CHECKPOINT_ZIP) as tmp:
         model.save(tmp)
     save_json(directory / CHECKPOINT_STATE, state)
@@ -169,17 +185,25 @@ def _numpy_global_state() -> list[Any]:
     return [name, keys.tolist(), int(position), int(has_gauss), float(gauss)]
 
 
-def train(model: PPO, total_timesteps: int, directory: str | os.PathLike[str], checkpoint_every: int = 10,
-          callbacks: list[BaseCallback] | None = None) -> PPO:
+def train(
+    model: PPO,
+    total_timesteps: int,
+    directory: str | os.PathLike[str],
+    checkpoint_every: int = 10,
+    callbacks: list[BaseCallback] | None = None,
+) -> PPO:
     """Run PPO until ``model.num_timesteps`` reaches ``total_timesteps``, checkpointing into
     ``directory`` every ``checkpoint_every`` updates and at the end; ``policy.zip`` is the final
     model. Interrupted (Ctrl-C), the last checkpoint stays: :func:`resume_or_start` continues it."""
     directory = Path(directory)
     remaining = total_timesteps - model.num_timesteps
     if remaining > 0:
-        model.learn(remaining, callback=CallbackList([_StdFloor(), *(callbacks or []),
-                                              _Checkpoints(directory, checkpoint_every)]),
-                    reset_num_timesteps=False, log_interval=1)
+        model.learn(
+            remaining,
+            callback=CallbackList([_StdFloor(), *(callbacks or []), _Checkpoints(directory, checkpoint_every)]),
+            reset_num_timesteps=False,
+            log_interval=1,
+        )
     save_checkpoint(model, directory)
     with atomic_path(directory / POLICY_ZIP) as tmp:
         model.save(tmp)

@@ -18,7 +18,10 @@ TASKS_DIR = Path(__file__).resolve().parent / "tasks"
 #: the vertical x-z plane. The planar scythe's world is the horizontal x-y plane, which an arm moving
 #: in a vertical plane cannot sweep: the Panda holds that scythe.
 DEFAULT_ROBOTS = {(tool, "3d"): "panda" for tool in ("spade", "hammer", "scythe")} | {
-    ("spade", "planar"): "planar3", ("hammer", "planar"): "planar3", ("scythe", "planar"): "panda"}
+    ("spade", "planar"): "planar3",
+    ("hammer", "planar"): "planar3",
+    ("scythe", "planar"): "panda",
+}
 
 
 def shipped_task_path(tool: str, world: str, robot: str | None = None) -> Path:
@@ -34,12 +37,16 @@ def shipped_tasks() -> list[tuple[str, str, str]]:
 def shipped_task(tool: str, world: str, robot: str | None = None) -> LearningTask:
     """The shipped task; InputError listing the shipped ones if there is none for these names."""
     if (tool, world) not in DEFAULT_ROBOTS:
-        raise InputError(f"no environment for the {tool!r} in world {world!r}; "
-                         f"known: {', '.join(f'{t}/{w}' for t, w in DEFAULT_ROBOTS)}")
+        raise InputError(
+            f"no environment for the {tool!r} in world {world!r}; "
+            f"known: {', '.join(f'{t}/{w}' for t, w in DEFAULT_ROBOTS)}"
+        )
     path = shipped_task_path(tool, world, robot)
     if not path.is_file():
         known = ", ".join("/".join(names) for names in shipped_tasks())
         name = robot or DEFAULT_ROBOTS[(tool, world)]
-        raise InputError(f"no shipped task for the {tool} in {world} with robot {name}; shipped: {known}; "
-                         "build your own with `toolimit run` and pass task=DIR/task.npz")
+        raise InputError(
+            f"no shipped task for the {tool} in {world} with robot {name}; shipped: {known}; "
+            "build your own with `toolimit run` and pass task=DIR/task.npz"
+        )
     return LearningTask.load(path)

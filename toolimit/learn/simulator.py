@@ -58,12 +58,14 @@ class TaskSimulator:
         self.batch_size = int(batch_size)
         self.robot = make_robot(task.robot, tool=task.tool)
         if tuple(self.robot.joint_names) != tuple(task.joint_names):
-            raise ValueError(f"task joints {list(task.joint_names)} are not robot {task.robot}'s "
-                             f"{list(self.robot.joint_names)}")
+            raise ValueError(
+                f"task joints {list(task.joint_names)} are not robot {task.robot}'s {list(self.robot.joint_names)}"
+            )
         self.scene = make_scene(task.tool, task.world, **(scene_kwargs or {}))
         if not np.isclose(self.scene.control_dt, task.control_dt):
-            raise ValueError(f"the task's control step {task.control_dt} s differs from the scene's "
-                             f"{self.scene.control_dt} s")
+            raise ValueError(
+                f"the task's control step {task.control_dt} s differs from the scene's {self.scene.control_dt} s"
+            )
         self.n_joints = len(task.joint_names)
         self.observation_size = 3 + 4 + self.n_joints + 1
         self.dt = task.control_dt

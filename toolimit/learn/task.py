@@ -76,9 +76,14 @@ class LearningTask:
         """Write the task as one ``.npz`` (atomically); returns the path."""
         path = Path(path)
         arrays: dict[str, Any] = {
-            "tool": np.str_(self.tool), "world": np.str_(self.world), "robot": np.str_(self.robot),
-            "joint_names": np.array(self.joint_names), "reference_q": self.reference_q, "base": self.base,
-            "horizon": np.int64(self.horizon), "control_dt": np.float64(self.control_dt),
+            "tool": np.str_(self.tool),
+            "world": np.str_(self.world),
+            "robot": np.str_(self.robot),
+            "joint_names": np.array(self.joint_names),
+            "reference_q": self.reference_q,
+            "base": self.base,
+            "horizon": np.int64(self.horizon),
+            "control_dt": np.float64(self.control_dt),
             "time_scale": np.float64(self.time_scale),
         }
         arrays |= {f"param_{name}": np.asarray(value, dtype=float) for name, value in self.params.items()}
@@ -110,22 +115,40 @@ class LearningTask:
             raise TaskFileError(f"{path}: base must be (3,), got {base.shape}")
         horizon = int(data["horizon"])
         if horizon < len(reference_q) - 1:
-            raise TaskFileError(f"{path}: horizon {horizon} is shorter than the reference "
-                                f"({len(reference_q) - 1} steps)")
-        params = {key.removeprefix("param_"): _param_value(value) for key, value in data.items()
-                  if key.startswith("param_")}
+            raise TaskFileError(
+                f"{path}: horizon {horizon} is shorter than the reference ({len(reference_q) - 1} steps)"
+            )
+        params = {
+            key.removeprefix("param_"): _param_value(value) for key, value in data.items() if key.startswith("param_")
+        }
         source = {key.removeprefix("source_"): str(value) for key, value in data.items() if key.startswith("source_")}
-        return cls(tool=str(data["tool"]), world=str(data["world"]), robot=str(data["robot"]),
-                   joint_names=joint_names, params=params, base=base, reference_q=reference_q, horizon=horizon,
-                   control_dt=float(data["control_dt"]), time_scale=float(data["time_scale"]), source=source)
+        return cls(
+            tool=str(data["tool"]),
+            world=str(data["world"]),
+            robot=str(data["robot"]),
+            joint_names=joint_names,
+            params=params,
+            base=base,
+            reference_q=reference_q,
+            horizon=horizon,
+            control_dt=float(data["control_dt"]),
+            time_scale=float(data["time_scale"]),
+            source=source,
+        )
 
 
 def _param_value(value: np.ndarray) -> np.ndarray | float:
     return float(value) if value.ndim == 0 else np.asarray(value, dtype=float)
 
 
-def success_horizon(robot: RobotModel, scene: Scene, params: SceneParams, base: np.ndarray,
-                    reference_q: np.ndarray, rng: np.random.Generator) -> int:
+def success_horizon(
+    robot: RobotModel,
+    scene: Scene,
+    params: SceneParams,
+    base: np.ndarray,
+    reference_q: np.ndarray,
+    rng: np.random.Generator,
+) -> int:
     """The episode length H in [T, 2T] steps: the reference replayed, then its last configuration
     held, until the scene's success test holds (2T when it never does). See the module docstring."""
     steps = len(reference_q) - 1
@@ -139,27 +162,44 @@ def success_horizon(robot: RobotModel, scene: Scene, params: SceneParams, base: 
     return 2 * steps
 
 
-def task_from_trajectory(trajectory: TrajectoryResult, world: str, params: SceneParams, robot: RobotModel,
-                         scene: Scene, seed: int = 0, source: dict[str, str] | None = None) -> LearningTask:
+def task_from_trajectory(
+    trajectory: TrajectoryResult,
+    world: str,
+    params: SceneParams,
+    robot: RobotModel,
+    scene: Scene,
+    seed: int = 0,
+    source: dict[str, str] | None = None,
+) -> LearningTask:
     """The task of ``trajectory`` (stage iii's result for ``robot``) in ``scene`` with ``params``.
 
     Raises ValueError if the trajectory is another robot's.
     """
     if tuple(trajectory.joint_names) != tuple(robot.joint_names):
-        raise ValueError(f"the trajectory's joints {list(trajectory.joint_names)} are not robot "
-                         f"{robot.name}'s {list(robot.joint_names)}")
+        raise ValueError(
+            f"the trajectory's joints {list(trajectory.joint_names)} are not robot "
+            f"{robot.name}'s {list(robot.joint_names)}"
+        )
     reference_q = resample_joints(trajectory.q, trajectory.dt, scene.control_dt)
     horizon = success_horizon(robot, scene, params, trajectory.base, reference_q, np.random.default_rng(seed))
     return LearningTask(
-        tool=trajectory.tool, world=world, robot=robot.name, joint_names=tuple(robot.joint_names),
+        tool=trajectory.tool,
+        world=world,
+        robot=robot.name,
+        joint_names=tuple(robot.joint_names),
         params={name: _param_value(np.asarray(value, dtype=float)) for name, value in params.items()},
-        base=np.asarray(trajectory.base, dtype=float), reference_q=reference_q, horizon=horizon,
-        control_dt=scene.control_dt, time_scale=trajectory.time_scale, source=dict(source or {}),
+        base=np.asarray(trajectory.base, dtype=float),
+        reference_q=reference_q,
+        horizon=horizon,
+        control_dt=scene.control_dt,
+        time_scale=trajectory.time_scale,
+        source=dict(source or {}),
     )
 
 
-def task_from_pipeline(alignment_dir: str | os.PathLike[str], trajectory_dir: str | os.PathLike[str],
-                       seed: int = 0) -> LearningTask:
+def task_from_pipeline(
+    alignment_dir: str | os.PathLike[str], trajectory_dir: str | os.PathLike[str], seed: int = 0
+) -> LearningTask:
     """The task of a finished pipeline: ``toolimit align`` output and ``toolimit trajopt`` output.
 
     The scene parameters are those of the candidate the trajectory tracks: the one in
@@ -193,8 +233,10 @@ def task_from_pipeline(alignment_dir: str | os.PathLike[str], trajectory_dir: st
             params = {k.removeprefix("param_"): _param_value(arrays[k]) for k in arrays.files if k.startswith("param_")}
         candidate = "best"
     if tool != trajectory.tool:
-        raise TaskFileError(f"{trajectory_dir}: the trajectory is for the {trajectory.tool}, "
-                            f"the alignment in {alignment_dir} for the {tool}")
+        raise TaskFileError(
+            f"{trajectory_dir}: the trajectory is for the {trajectory.tool}, "
+            f"the alignment in {alignment_dir} for the {tool}"
+        )
     robot = make_robot(trajectory.robot, tool=tool)
     source = {"alignment": str(alignment_dir), "trajectory": str(trajectory_dir), "candidate": candidate}
     return task_from_trajectory(trajectory, world, params, robot, make_scene(tool, world), seed, source)

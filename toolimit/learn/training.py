@@ -117,10 +117,16 @@ class _Curve(BaseCallback):
         return True
 
     def _on_rollout_end(self) -> None:
-        self.pending = {
-            "env_steps": int(self.model.num_timesteps), "return_mean": float(np.mean(self.returns)),
-            "success_rate": float(np.mean(self.successes)), "goal_reward_mean": float(np.mean(self.goals)),
-        } if self.returns else None
+        self.pending = (
+            {
+                "env_steps": int(self.model.num_timesteps),
+                "return_mean": float(np.mean(self.returns)),
+                "success_rate": float(np.mean(self.successes)),
+                "goal_reward_mean": float(np.mean(self.goals)),
+            }
+            if self.returns
+            else None
+        )
         self.returns, self.successes, self.goals = [], [], []
 
     def _on_rollout_start(self) -> None:
@@ -147,8 +153,13 @@ class _Curve(BaseCallback):
         self.bar.close()
 
 
-def learn_policy(task: LearningTask, out_dir: str | Path, config: LearningConfig = LearningConfig(),
-                 on_record: Callable[[dict[str, Any]], None] | None = None, progress: bool = True) -> LearningOutcome:
+def learn_policy(
+    task: LearningTask,
+    out_dir: str | Path,
+    config: LearningConfig = LearningConfig(),
+    on_record: Callable[[dict[str, Any]], None] | None = None,
+    progress: bool = True,
+) -> LearningOutcome:
     """Clone (optional), warm the value up and fine-tune by PPO; see the module docstring."""
     threads = torch.get_num_threads()
     torch.set_num_threads(config.torch_threads)
@@ -158,8 +169,13 @@ def learn_policy(task: LearningTask, out_dir: str | Path, config: LearningConfig
         torch.set_num_threads(threads)
 
 
-def _learn_policy(task: LearningTask, out_dir: Path, config: LearningConfig,
-                  on_record: Callable[[dict[str, Any]], None] | None, progress: bool) -> LearningOutcome:
+def _learn_policy(
+    task: LearningTask,
+    out_dir: Path,
+    config: LearningConfig,
+    on_record: Callable[[dict[str, Any]], None] | None,
+    progress: bool,
+) -> LearningOutcome:
     started = time.perf_counter()
     settings = config.settings()
     torch.manual_seed(config.seed)
@@ -178,32 +194,58 @@ def _learn_policy(task: LearningTask, out_dir: Path, config: LearningConfig,
     model, resumed = resume_or_start(out_dir, env, start)
     curve = out_dir / CURVE_JSONL
     _truncate_curve(curve, model.num_timesteps)
-    train(model, config.timesteps, out_dir, config.checkpoint_every,
-          [_Curve(curve, config.timesteps, on_record, progress)])
+    train(
+        model,
+        config.timesteps,
+        out_dir,
+        config.checkpoint_every,
+        [_Curve(curve, config.timesteps, on_record, progress)],
+    )
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
     simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
     record = {
-        "tool": task.tool, "world": task.world, "robot": task.robot, "config": asdict(config),
-        "ppo": asdict(settings), "ppo_env_steps": int(model.num_timesteps), "cloning_env_steps": int(cloning_steps),
-        "env_steps": int(model.num_timesteps + cloning_steps), "wall_time_s": wall, "simulation_time_s": simulation,
-        "learning_time_s": wall - simulation, "resumed": resumed,
+        "tool": task.tool,
+        "world": task.world,
+        "robot": task.robot,
+        "config": asdict(config),
+        "ppo": asdict(settings),
+        "ppo_env_steps": int(model.num_timesteps),
+        "cloning_env_steps": int(cloning_steps),
+        "env_steps": int(model.num_timesteps + cloning_steps),
+        "wall_time_s": wall,
+        "simulation_time_s": simulation,
+        "learning_time_s": wall - simulation,
+        "resumed": resumed,
     }
     save_json(out_dir / LEARNING_JSON, record)
     return LearningOutcome(model, out_dir, record)
 
 
-def _clone(model: PPO, task: LearningTask, config: LearningConfig, settings: PpoSettings,
-           progress: bool) -> dict[str, Any]:
+def _clone(
+    model: PPO, task: LearningTask, config: LearningConfig, settings: PpoSettings, progress: bool
+) -> dict[str, Any]:
     """Collect the demonstrations, clone and warm up; the JSON record."""
-    demonstrations = collect_demonstrations(task, config.clone_rollouts, config.clone_noise, settings.gamma,
-                                            config.seed, config.scene_kwargs)
-    report = clone(model.policy, demonstrations, config.clone_steps, value_steps=config.value_steps,
-                   seed=config.seed, progress=progress)
-    return {"rollouts": config.clone_rollouts, "action_noise": config.clone_noise,
-            "env_steps": demonstrations.env_steps, "pairs": len(demonstrations.actions),
-            "controller_goal_rewards": demonstrations.goal_rewards.tolist(),
-            "controller_successes": demonstrations.successes.tolist(), **asdict(report)}
+    demonstrations = collect_demonstrations(
+        task, config.clone_rollouts, config.clone_noise, settings.gamma, config.seed, config.scene_kwargs
+    )
+    report = clone(
+        model.policy,
+        demonstrations,
+        config.clone_steps,
+        value_steps=config.value_steps,
+        seed=config.seed,
+        progress=progress,
+    )
+    return {
+        "rollouts": config.clone_rollouts,
+        "action_noise": config.clone_noise,
+        "env_steps": demonstrations.env_steps,
+        "pairs": len(demonstrations.actions),
+        "controller_goal_rewards": demonstrations.goal_rewards.tolist(),
+        "controller_successes": demonstrations.successes.tolist(),
+        **asdict(report),
+    }
 
 
 def _previous_record(out_dir: Path) -> dict[str, Any]:
@@ -234,4 +276,3 @@ def load_policy(directory: str | Path) -> tuple[PPO, LearningTask]:
     if not policy.is_file():
         raise FileNotFoundError(f"{policy}: no such file (run `toolimit learn` first)")
     return PPO.load(policy, device="cpu"), LearningTask.load(directory / TASK_NPZ)
-

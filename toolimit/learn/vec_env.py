@@ -79,10 +79,13 @@ class BatchedTaskVecEnv(VecEnv):
             success = self.simulator.is_success()
             elapsed = time.perf_counter() - self._episode_start
             for i, info in enumerate(infos):
-                info.update(terminal_observation=observations[i], terminal_joints=self.simulator.q[i].copy(),
-                            is_success=bool(success[i]),
-                            episode={"r": float(self._returns[i]), "l": self.simulator.t, "t": elapsed},
-                            **{"TimeLimit.truncated": False})
+                info.update(
+                    terminal_observation=observations[i],
+                    terminal_joints=self.simulator.q[i].copy(),
+                    is_success=bool(success[i]),
+                    episode={"r": float(self._returns[i]), "l": self.simulator.t, "t": elapsed},
+                    **{"TimeLimit.truncated": False},
+                )
             observations = self.reset()
         return observations, rewards.astype(np.float32), np.full(self.num_envs, done), infos
 
@@ -108,8 +111,9 @@ class BatchedTaskVecEnv(VecEnv):
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
         setattr(self, attr_name, value)
 
-    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
-                   **method_kwargs: Any) -> list[Any]:
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any
+    ) -> list[Any]:
         return [getattr(self, method_name)(*method_args, **method_kwargs)] * self._count(indices)
 
     def env_is_wrapped(self, wrapper_class: type, indices: VecEnvIndices = None) -> list[bool]:

@@ -118,8 +118,9 @@ def talos() -> ArmDescription:
     pelvis_height = float(q_ref[2])
     q_ref[:7] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]  # free-flyer at the origin (x, y, z, quaternion)
     model = _reduced(robot.model, q_ref, TALOS_ACTIVE_JOINTS)
-    q_neutral = np.array([robot.q0[robot.model.joints[robot.model.getJointId(name)].idx_q]
-                          for name in TALOS_ACTIVE_JOINTS])
+    q_neutral = np.array(
+        [robot.q0[robot.model.joints[robot.model.getJointId(name)].idx_q] for name in TALOS_ACTIVE_JOINTS]
+    )
     return ArmDescription(
         name="talos",
         model=model,

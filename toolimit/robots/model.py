@@ -171,8 +171,9 @@ class RobotModel:
             )
 
 
-def build_robot_model(arm: ArmDescription, tool: ToolSpec, tool_placement: pin.SE3 | None,
-                      base_height: float | None) -> RobotModel:
+def build_robot_model(
+    arm: ArmDescription, tool: ToolSpec, tool_placement: pin.SE3 | None, base_height: float | None
+) -> RobotModel:
     """Add the tool frame to the arm and the (x, y, yaw) base joints in front of it."""
     arm_model = pin.Model(arm.model)
     flange_id = arm_model.getFrameId(arm.flange_frame)

@@ -144,8 +144,10 @@ def parameter_violation(parameters: tuple[ParameterSpec, ...], params: ScenePara
         for axis in spec.axes:
             if not lows[axis] <= value[axis] <= highs[axis]:
                 reason = f" ({spec.bound_reason})" if spec.bound_reason else ""
-                return (f"{spec.name} {'xyz'[axis]} = {value[axis]:.3f} m is outside the world bound "
-                        f"[{lows[axis]:.4g}, {highs[axis]:.4g}] m{reason}")
+                return (
+                    f"{spec.name} {'xyz'[axis]} = {value[axis]:.3f} m is outside the world bound "
+                    f"[{lows[axis]:.4g}, {highs[axis]:.4g}] m{reason}"
+                )
     return None
 
 
@@ -199,9 +201,7 @@ def batched_pose(tool_pose: ToolPose, batch_size: int) -> tuple[np.ndarray, np.n
     if position.shape not in ((3,), (batch_size, 3)):
         raise ValueError(f"tool_pose.position must have shape (3,) or ({batch_size}, 3), got {position.shape}")
     if rotation.shape not in ((3, 3), (batch_size, 3, 3)):
-        raise ValueError(
-            f"tool_pose.rotation must have shape (3, 3) or ({batch_size}, 3, 3), got {rotation.shape}"
-        )
+        raise ValueError(f"tool_pose.rotation must have shape (3, 3) or ({batch_size}, 3, 3), got {rotation.shape}")
     if not (np.all(np.isfinite(position)) and np.all(np.isfinite(rotation))):
         raise ValueError("tool_pose contains non-finite values")
     position = np.broadcast_to(position, (batch_size, 3)).copy()

@@ -18,8 +18,14 @@ from toolimit.tools import ToolPose
 StepHook = Callable[[int, Scene], None]
 
 
-def replay(scene: Scene, params: SceneParams, rng: np.random.Generator, poses: ToolPose, batch_size: int = 1,
-           on_step: StepHook | None = None) -> np.ndarray:
+def replay(
+    scene: Scene,
+    params: SceneParams,
+    rng: np.random.Generator,
+    poses: ToolPose,
+    batch_size: int = 1,
+    on_step: StepHook | None = None,
+) -> np.ndarray:
     """Reset B instances of ``scene`` with ``params`` (drawing from ``rng``), step the tool through
     ``poses`` ((T, 3) positions m, (T, 3, 3) world-from-tool rotations, world frame), calling
     ``on_step(t, scene)`` after step t; returns the final goal reward (B,).

@@ -16,8 +16,21 @@ from toolimit.trajopt.time_scale import TIME_SCALE_GRID, choose_time_scale
 from toolimit.trajopt.track import TrackOptions, base_guesses, track
 
 __all__ = [
-    "PoseTargets", "SqpOptions", "SqpOutcome", "TIME_SCALE_GRID", "TrackOptions", "TrackingProblem",
-    "TrackingWeights", "TrajectoryResult", "base_guesses", "choose_time_scale", "execute_in_scene",
-    "from_original_spade_tip", "load_pose_targets", "reachable_steps", "solve_sqp",
-    "targets_from_alignment", "track",
+    "PoseTargets",
+    "SqpOptions",
+    "SqpOutcome",
+    "TIME_SCALE_GRID",
+    "TrackOptions",
+    "TrackingProblem",
+    "TrackingWeights",
+    "TrajectoryResult",
+    "base_guesses",
+    "choose_time_scale",
+    "execute_in_scene",
+    "from_original_spade_tip",
+    "load_pose_targets",
+    "reachable_steps",
+    "solve_sqp",
+    "targets_from_alignment",
+    "track",
 ]

@@ -29,8 +29,14 @@ def resample_joints(q: np.ndarray, dt: float, control_dt: float) -> np.ndarray:
     return np.stack([np.interp(new_times, times, q[:, j]) for j in range(q.shape[1])], axis=1)
 
 
-def execute_in_scene(robot: RobotModel, trajectory: TrajectoryResult, scene: Scene, params: SceneParams,
-                     rng: np.random.Generator, batch_size: int = 1) -> np.ndarray:
+def execute_in_scene(
+    robot: RobotModel,
+    trajectory: TrajectoryResult,
+    scene: Scene,
+    params: SceneParams,
+    rng: np.random.Generator,
+    batch_size: int = 1,
+) -> np.ndarray:
     """Replay the robot's joint trajectory in ``scene`` (tool pose by forward kinematics at
     ``trajectory.base``); returns the goal reward (B,).
 

@@ -154,8 +154,14 @@ class TrackingProblem:
         weights: cost weights.
     """
 
-    def __init__(self, robot: RobotModel, targets: PoseTargets, dt: float,
-                 q_start: np.ndarray | None = None, weights: TrackingWeights = TrackingWeights()) -> None:
+    def __init__(
+        self,
+        robot: RobotModel,
+        targets: PoseTargets,
+        dt: float,
+        q_start: np.ndarray | None = None,
+        weights: TrackingWeights = TrackingWeights(),
+    ) -> None:
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be positive, got {dt}")
         q_start = robot.q_neutral if q_start is None else np.asarray(q_start, dtype=float)
@@ -172,7 +178,9 @@ class TrackingProblem:
         self._targets_inverse = [pin.SE3(r, p).inverse() for p, r in zip(targets.positions, targets.rotations)]
         #: The terms of J, in the order their values and models are summed.
         self.terms: tuple[CostTerm, ...] = (
-            PoseTerm(), VelocityTerm(weights.velocity), PostureTerm(weights.posture, self.q_start),
+            PoseTerm(),
+            VelocityTerm(weights.velocity),
+            PostureTerm(weights.posture, self.q_start),
         )
 
     @property
@@ -196,7 +204,9 @@ class TrackingProblem:
     def step_linearisation(self, base: np.ndarray, q_t: np.ndarray, t: int) -> tuple[np.ndarray, np.ndarray]:
         """Residual (6,) and Jacobian (6, 3 + N) of target t (1..T) at base (3,) and joints q_t (N,)."""
         error = self._error(base, q_t, t, jacobians=True)
-        jacobian = pin.Jlog6(error) @ pin.getFrameJacobian(self._model, self._data, self._frame, pin.ReferenceFrame.LOCAL)
+        jacobian = pin.Jlog6(error) @ pin.getFrameJacobian(
+            self._model, self._data, self._frame, pin.ReferenceFrame.LOCAL
+        )
         return self._w * pin.log6(error).vector, self._w[:, None] * jacobian
 
     def _error(self, base: np.ndarray, q_t: np.ndarray, t: int, jacobians: bool) -> pin.SE3:

@@ -18,8 +18,15 @@ from toolimit.robots import RobotModel
 REACH_TOLERANCE = 0.01
 
 
-def reachable_steps(robot: RobotModel, base: np.ndarray, positions: np.ndarray, q_init: np.ndarray | None = None,
-                    tolerance: float = REACH_TOLERANCE, iterations: int = 60, damping: float = 1e-3) -> np.ndarray:
+def reachable_steps(
+    robot: RobotModel,
+    base: np.ndarray,
+    positions: np.ndarray,
+    q_init: np.ndarray | None = None,
+    tolerance: float = REACH_TOLERANCE,
+    iterations: int = 60,
+    damping: float = 1e-3,
+) -> np.ndarray:
     """(T,) bool: target positions (T, 3) (world, m) reachable by the tool head with the base at
     ``base`` (3,) and the joints within limits. ``q_init`` (T, N) are per-target IK starts."""
     positions = np.asarray(positions, dtype=float)

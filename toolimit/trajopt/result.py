@@ -28,6 +28,7 @@ UPSIDE_DOWN_RAD = np.pi / 2
 #: |v - diff(q) / dt| allowed in trajectory.npz, rad/s.
 _VELOCITY_CONSISTENCY_TOL = 1e-6
 
+
 @dataclass(frozen=True)
 class JointTrajectory:
     """A trajectory.npz: q (T+1, N) rad, v (T, N) rad/s, base (3,) (m, m, rad), joint names, dt s."""
@@ -73,7 +74,6 @@ def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
         t, j = np.unravel_index(np.argmax(mismatch), mismatch.shape)
         raise InputError(f"{path}: v[{t}, {j}] differs from (q[{t + 1}] - q[{t}]) / dt by {mismatch[t, j]:.3g} rad/s")
     return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt)
-
 
 
 @dataclass(frozen=True)
@@ -133,10 +133,12 @@ class TrajectoryResult:
 
     def describe(self) -> str:
         """One line: time scale, cost, median position and rotation errors, violations."""
-        text = (f"time scale {self.time_scale:g}, J = {self.statistics.get('cost', float('nan')):.4f}, "
-                f"position error median {np.median(self.position_error) * 100:.1f} cm, rotation error median "
-                f"{np.degrees(np.median(self.rotation_error)):.0f} deg, limit violations {self.limit_violations}, "
-                f"velocity violations {self.velocity_violations}")
+        text = (
+            f"time scale {self.time_scale:g}, J = {self.statistics.get('cost', float('nan')):.4f}, "
+            f"position error median {np.median(self.position_error) * 100:.1f} cm, rotation error median "
+            f"{np.degrees(np.median(self.rotation_error)):.0f} deg, limit violations {self.limit_violations}, "
+            f"velocity violations {self.velocity_violations}"
+        )
         if self.upside_down:
             text += "; UPSIDE DOWN: the tool is turned more than 90 deg from its target orientation at most steps"
         return text
@@ -174,8 +176,14 @@ class TrajectoryResult:
         text = json_text(document)
         with atomic_path(directory / TRAJECTORY_NPZ) as npz_tmp, atomic_path(directory / TRAJECTORY_JSON) as json_tmp:
             with open(npz_tmp, "wb") as handle:
-                np.savez(handle, q=self.q, v=self.v, base=self.base, joint_names=np.array(self.joint_names),
-                         dt=np.float64(self.dt))
+                np.savez(
+                    handle,
+                    q=self.q,
+                    v=self.v,
+                    base=self.base,
+                    joint_names=np.array(self.joint_names),
+                    dt=np.float64(self.dt),
+                )
             json_tmp.write_text(text)
         return directory
 
@@ -189,8 +197,13 @@ class TrajectoryResult:
         q, v = arrays.q, arrays.v
         document = json.loads(json_path.read_text())
         return cls(
-            robot=document["robot"], tool=document["tool"], joint_names=arrays.joint_names, q=q, v=v,
-            base=arrays.base, dt=arrays.dt,
+            robot=document["robot"],
+            tool=document["tool"],
+            joint_names=arrays.joint_names,
+            q=q,
+            v=v,
+            base=arrays.base,
+            dt=arrays.dt,
             time_scale=float(document["time_scale"]),
             position_error=np.asarray(document["position_error"], dtype=float),
             rotation_error=np.asarray(document["rotation_error"], dtype=float),

@@ -120,8 +120,9 @@ class SqpOutcome:
     cost_history: tuple[float, ...]
 
 
-def project_to_limits(q: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray,
-                      velocity_limit: np.ndarray) -> np.ndarray:
+def project_to_limits(
+    q: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray, velocity_limit: np.ndarray
+) -> np.ndarray:
     """Forward rollout of q (T+1, N) from q[0] that clips each velocity to +-velocity_limit, then
     each position to [lower, upper]. q[0] must be within the limits; the result satisfies both.
     Steps that satisfy both limits and follow an unchanged step are kept as they are."""
@@ -168,8 +169,10 @@ class _TrackingQp:
         rows.append(step_index[:-1].ravel())
         cols.append(step_index[1:].ravel())
         row_index, col_index = np.concatenate(rows), np.concatenate(cols)
-        order = sp.csc_matrix((np.arange(1, len(row_index) + 1, dtype=float), (row_index, col_index)),
-                              shape=(self.n_variables, self.n_variables))
+        order = sp.csc_matrix(
+            (np.arange(1, len(row_index) + 1, dtype=float), (row_index, col_index)),
+            shape=(self.n_variables, self.n_variables),
+        )
         self._p_pattern = order
         self._p_order = order.data.astype(np.int64) - 1  # csc position k holds COO entry _p_order[k]
         self._tri = (tri_i, tri_j)
@@ -197,12 +200,14 @@ class _TrackingQp:
         diagonal = np.zeros(self.horizon) if diagonal is None else diagonal
         arm[:, np.arange(self.n), np.arange(self.n)] += (diagonal + damping)[:, None]
         coupling = _sum_blocks(m.hessian_next for m in models)
-        values = np.concatenate([
-            base_block[self._base_tri].ravel(),
-            (np.zeros((self.horizon, self.nb, self.n)) if cross is None else cross).ravel(),
-            arm[:, self._tri[0], self._tri[1]].ravel(),
-            np.repeat(np.zeros(self.horizon - 1) if coupling is None else coupling, self.n),
-        ])
+        values = np.concatenate(
+            [
+                base_block[self._base_tri].ravel(),
+                (np.zeros((self.horizon, self.nb, self.n)) if cross is None else cross).ravel(),
+                arm[:, self._tri[0], self._tri[1]].ravel(),
+                np.repeat(np.zeros(self.horizon - 1) if coupling is None else coupling, self.n),
+            ]
+        )
         return values[self._p_order]
 
     def gradient(self, models: list[QuadraticModel]) -> np.ndarray:
@@ -212,17 +217,27 @@ class _TrackingQp:
         assert steps is not None, "every term has a gradient in the joint steps"
         return np.concatenate([np.zeros(self.nb) if base is None else base, steps.ravel()])
 
-    def solve(self, hessian: np.ndarray, gradient: np.ndarray, lower: np.ndarray,
-              upper: np.ndarray) -> tuple[np.ndarray, int]:
+    def solve(
+        self, hessian: np.ndarray, gradient: np.ndarray, lower: np.ndarray, upper: np.ndarray
+    ) -> tuple[np.ndarray, int]:
         """Minimise 1/2 x'Px + g'x s.t. lower <= A x <= upper; returns (x, OSQP iterations)."""
         if self.solver is None:
             pattern = self._p_pattern.copy()
             pattern.data = hessian
             self.solver = osqp.OSQP()
             self.solver.setup(
-                pattern, gradient, self.A, lower, upper, verbose=False, polishing=self.options.polishing,
-                warm_starting=True, eps_abs=self.options.osqp_eps, eps_rel=self.options.osqp_eps,
-                max_iter=self.options.osqp_max_iter, rho=self.options.osqp_rho,
+                pattern,
+                gradient,
+                self.A,
+                lower,
+                upper,
+                verbose=False,
+                polishing=self.options.polishing,
+                warm_starting=True,
+                eps_abs=self.options.osqp_eps,
+                eps_rel=self.options.osqp_eps,
+                max_iter=self.options.osqp_max_iter,
+                rho=self.options.osqp_rho,
                 adaptive_rho_tolerance=self.options.osqp_adaptive_rho_tolerance,
             )
         else:
@@ -236,8 +251,11 @@ class _TrackingQp:
             result = self.solver.solve(raise_error=False)
         self._duals = result.y
         status = result.info.status_val
-        usable = (osqp.SolverStatus.OSQP_SOLVED, osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
-                  osqp.SolverStatus.OSQP_MAX_ITER_REACHED)
+        usable = (
+            osqp.SolverStatus.OSQP_SOLVED,
+            osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
+            osqp.SolverStatus.OSQP_MAX_ITER_REACHED,
+        )
         if status not in usable or result.x is None or not np.all(np.isfinite(result.x)):
             raise SolverFailure(f"OSQP failed on the tracking QP: {result.info.status}")
         return result.x, int(result.info.iter)
@@ -252,9 +270,13 @@ def _sum_blocks(blocks: Iterable[np.ndarray | None]) -> np.ndarray | None:
     return total
 
 
-def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOptions = SqpOptions(),
-              q_guess: np.ndarray | None = None,
-              stop_early: Callable[[np.ndarray, np.ndarray], bool] | None = None) -> SqpOutcome:
+def solve_sqp(
+    problem: TrackingProblem,
+    base_guess: np.ndarray,
+    options: SqpOptions = SqpOptions(),
+    q_guess: np.ndarray | None = None,
+    stop_early: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+) -> SqpOutcome:
     """Optimise base and joint trajectory from ``base_guess`` (3,) = (x, y, yaw).
 
     The base coordinates that the robot cannot move (``robot.base_dofs``) stay at their guess.
@@ -303,13 +325,21 @@ def solve_sqp(problem: TrackingProblem, base_guess: np.ndarray, options: SqpOpti
             stopped_early = True
             break
     return SqpOutcome(
-        base=base, q=q, cost=cost, iterations=iteration, qp_iterations=qp_iterations, converged=converged,
+        base=base,
+        q=q,
+        cost=cost,
+        iterations=iteration,
+        qp_iterations=qp_iterations,
+        converged=converged,
         stopped_early=stopped_early,
-        wall_time_s=time.perf_counter() - started, cost_history=tuple(history),
+        wall_time_s=time.perf_counter() - started,
+        cost_history=tuple(history),
     )
 
 
-def _start(problem: TrackingProblem, base_guess: np.ndarray, q_guess: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def _start(
+    problem: TrackingProblem, base_guess: np.ndarray, q_guess: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The first iterate: base (3,) from the guess, q (T+1, N) from ``q_guess`` projected to the
     limits (q[0] = q_start), or q_start held."""
     robot, horizon, n = problem.robot, problem.horizon, problem.n_joints
@@ -325,8 +355,9 @@ def _start(problem: TrackingProblem, base_guess: np.ndarray, q_guess: np.ndarray
     return base, project_to_limits(q, problem.dt, robot.lower, robot.upper, robot.velocity_limit)
 
 
-def _qp_step(problem: TrackingProblem, qp: _TrackingQp, at: Iterate,
-             damping: float) -> tuple[np.ndarray, np.ndarray, int]:
+def _qp_step(
+    problem: TrackingProblem, qp: _TrackingQp, at: Iterate, damping: float
+) -> tuple[np.ndarray, np.ndarray, int]:
     """The damped QP's step at ``at``: base step (nb,), joint-position steps (T, N), OSQP iterations.
     The bounds keep q + dq within the joint limits and its velocities within theirs."""
     robot = problem.robot
@@ -335,7 +366,7 @@ def _qp_step(problem: TrackingProblem, qp: _TrackingQp, at: Iterate,
     bound_low = np.concatenate([(robot.lower - at.q[1:]).ravel(), (-robot.velocity_limit - velocity).ravel()])
     bound_up = np.concatenate([(robot.upper - at.q[1:]).ravel(), (robot.velocity_limit - velocity).ravel()])
     step, used = qp.solve(qp.hessian_values(models, damping), qp.gradient(models), bound_low, bound_up)
-    return step[: qp.nb], step[qp.nb:].reshape(problem.horizon, problem.n_joints), used
+    return step[: qp.nb], step[qp.nb :].reshape(problem.horizon, problem.n_joints), used
 
 
 def _predicted_decrease(problem: TrackingProblem, at: Iterate, d_base: np.ndarray, d_q: np.ndarray) -> float:
@@ -347,9 +378,17 @@ def _predicted_decrease(problem: TrackingProblem, at: Iterate, d_base: np.ndarra
     return -change
 
 
-def _line_search(problem: TrackingProblem, qp: _TrackingQp, base: np.ndarray, q: np.ndarray, cost: float,
-                 d_base: np.ndarray, d_q: np.ndarray, predicted: float,
-                 options: SqpOptions) -> tuple[np.ndarray, np.ndarray, float, float] | None:
+def _line_search(
+    problem: TrackingProblem,
+    qp: _TrackingQp,
+    base: np.ndarray,
+    q: np.ndarray,
+    cost: float,
+    d_base: np.ndarray,
+    d_q: np.ndarray,
+    predicted: float,
+    options: SqpOptions,
+) -> tuple[np.ndarray, np.ndarray, float, float] | None:
     """Backtracking on the true J from step length 1, halving: the first (base, q, J, length) with
     sufficient decrease (Armijo, 1e-4 of the predicted one), the trajectory projected to the limits;
     None when no length in ``options.line_search_steps`` gives one."""

@@ -22,9 +22,14 @@ TIME_SCALE_GRID = (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0)
 MEDIAN_ERROR_THRESHOLD = 0.01
 
 
-def choose_time_scale(robot: RobotModel, targets: PoseTargets, options: TrackOptions = TrackOptions(),
-                      grid: tuple[float, ...] = TIME_SCALE_GRID, threshold: float = MEDIAN_ERROR_THRESHOLD,
-                      rng: np.random.Generator | None = None) -> TrajectoryResult:
+def choose_time_scale(
+    robot: RobotModel,
+    targets: PoseTargets,
+    options: TrackOptions = TrackOptions(),
+    grid: tuple[float, ...] = TIME_SCALE_GRID,
+    threshold: float = MEDIAN_ERROR_THRESHOLD,
+    rng: np.random.Generator | None = None,
+) -> TrajectoryResult:
     """Track at each scale of ``grid`` in ascending order; return the first result whose median
     position error is below ``threshold`` (m), or the best-tracking one if none is.
 
@@ -46,6 +51,9 @@ def choose_time_scale(robot: RobotModel, targets: PoseTargets, options: TrackOpt
             break
     assert best is not None  # the grid is not empty
     met = float(np.median(best.position_error)) < threshold
-    best.statistics["time_scale_search"] = {"median_position_error_m": tried, "threshold_m": threshold,
-                                            "threshold_met": met}
+    best.statistics["time_scale_search"] = {
+        "median_position_error_m": tried,
+        "threshold_m": threshold,
+        "threshold_met": met,
+    }
     return best

@@ -85,13 +85,20 @@ class TrackOptions:
             raise InputError(f"start_radius must be positive, got {self.start_radius}")
         unknown = set(self.initialisations) - set(INITIALISATIONS)
         if not self.initialisations or unknown:
-            raise InputError(f"initialisations must be a non-empty subset of {INITIALISATIONS}, "
-                             f"got {self.initialisations}")
+            raise InputError(
+                f"initialisations must be a non-empty subset of {INITIALISATIONS}, got {self.initialisations}"
+            )
 
 
-def base_guesses(robot: RobotModel, targets: PoseTargets, count: int = 8, radius: float = 0.6,
-                 ring: int = 8, rng: np.random.Generator | None = None,
-                 q_start: np.ndarray | None = None) -> np.ndarray:
+def base_guesses(
+    robot: RobotModel,
+    targets: PoseTargets,
+    count: int = 8,
+    radius: float = 0.6,
+    ring: int = 8,
+    rng: np.random.Generator | None = None,
+    q_start: np.ndarray | None = None,
+) -> np.ndarray:
     """(count, 3) base initialisations (x, y, yaw) around the targets (see the module docstring)."""
     centre = targets.positions[:, :2].mean(axis=0)
     ring = min(ring, count)
@@ -135,8 +142,13 @@ def base_in_footprints(base: np.ndarray, footprints: np.ndarray | None) -> int |
     return int(hits[0]) if hits.size else None
 
 
-def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = TrackOptions(),
-          rng: np.random.Generator | None = None, guesses: np.ndarray | None = None) -> TrajectoryResult:
+def track(
+    robot: RobotModel,
+    targets: PoseTargets,
+    options: TrackOptions = TrackOptions(),
+    rng: np.random.Generator | None = None,
+    guesses: np.ndarray | None = None,
+) -> TrajectoryResult:
     """Optimise base and joint trajectory to follow ``targets``; the best start is returned.
 
     ``guesses`` (S, 3) replaces the generated base initialisations. The result's statistics hold
@@ -147,8 +159,9 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
     started = time.perf_counter()
     dt = options.time_scale / targets.fps
     if guesses is None:
-        guesses = base_guesses(robot, targets, options.starts, options.start_radius, options.ring_starts, rng,
-                               options.q_start)
+        guesses = base_guesses(
+            robot, targets, options.starts, options.start_radius, options.ring_starts, rng, options.q_start
+        )
     guesses = np.atleast_2d(np.asarray(guesses, dtype=float))
     variants = [targets, targets.rotated_about_tool_z(np.pi)] if robot.tool.roll_symmetric else [targets]
     runs: list[_Run] = []
@@ -163,8 +176,9 @@ def track(robot: RobotModel, targets: PoseTargets, options: TrackOptions = Track
             for initialisation in options.initialisations:
                 for start_index, guess in enumerate(guesses):
                     q_guess = ik_rollout(problem, guess) if initialisation == "rollout" else None
-                    outcome = solve_sqp(problem, guess, options.sqp, q_guess=q_guess,
-                                        stop_early=_joins(finished, options))
+                    outcome = solve_sqp(
+                        problem, guess, options.sqp, q_guess=q_guess, stop_early=_joins(finished, options)
+                    )
                     bar.update()
                     if outcome.converged:
                         finished.append(outcome)
@@ -228,8 +242,15 @@ def _joins(finished: list[SqpOutcome], options: TrackOptions) -> Callable[[np.nd
     return joins
 
 
-def evaluate_trajectory(robot: RobotModel, targets: PoseTargets, base: np.ndarray, q: np.ndarray, dt: float,
-                        time_scale: float, statistics: dict) -> TrajectoryResult:
+def evaluate_trajectory(
+    robot: RobotModel,
+    targets: PoseTargets,
+    base: np.ndarray,
+    q: np.ndarray,
+    dt: float,
+    time_scale: float,
+    statistics: dict,
+) -> TrajectoryResult:
     """Errors, limit margins and velocity ratios of a trajectory q (T+1, N) at ``base`` (3,)."""
     positions, rotations = robot.tool_poses(q[1:], base)
     position_error = np.linalg.norm(positions - targets.positions, axis=1)

@@ -154,8 +154,13 @@ def primitive_geometry(model: pin.Model, flange_frame: str, base_height: float) 
         geometry.addGeometryObject(obj)
 
     if base_height > 0:
-        add("pedestal", 0, pin.SE3(np.eye(3), np.array([0.0, 0.0, -base_height / 2])),
-            coal.Box(0.12, 0.12, base_height), _JOINT_COLOUR)
+        add(
+            "pedestal",
+            0,
+            pin.SE3(np.eye(3), np.array([0.0, 0.0, -base_height / 2])),
+            coal.Box(0.12, 0.12, base_height),
+            _JOINT_COLOUR,
+        )
     flange = model.frames[model.getFrameId(flange_frame)]
     for joint in range(1, model.njoints):
         add(f"{model.names[joint]}_ball", joint, pin.SE3.Identity(), coal.Sphere(_JOINT_RADIUS), _JOINT_COLOUR)
@@ -168,8 +173,13 @@ def primitive_geometry(model: pin.Model, flange_frame: str, base_height: float) 
             if length < 1e-6:
                 continue
             turn = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), end / length).matrix()
-            add(f"{model.names[joint]}_link{k}", joint, pin.SE3(turn, end / 2), coal.Capsule(_LINK_RADIUS, length),
-                _LINK_COLOUR)
+            add(
+                f"{model.names[joint]}_link{k}",
+                joint,
+                pin.SE3(turn, end / 2),
+                coal.Capsule(_LINK_RADIUS, length),
+                _LINK_COLOUR,
+            )
     return geometry
 
 
@@ -222,10 +232,18 @@ def _current_target_index(times: np.ndarray, dt: float, horizon: int) -> np.ndar
     return np.clip(np.rint(times / dt).astype(int), 1, horizon) - 1
 
 
-def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, frame_dt: float, *,
-                   dt: float | None = None, targets: tuple[np.ndarray, np.ndarray] | None = None,
-                   target_stride: int | None = None, triad_scale: float = 0.1,
-                   world_frames: Sequence[Mapping[str, np.ndarray]] | None = None) -> meshcat.Visualizer:
+def _animated_view(
+    robot: RobotModel,
+    q_frames: np.ndarray,
+    base: np.ndarray,
+    frame_dt: float,
+    *,
+    dt: float | None = None,
+    targets: tuple[np.ndarray, np.ndarray] | None = None,
+    target_stride: int | None = None,
+    triad_scale: float = 0.1,
+    world_frames: Sequence[Mapping[str, np.ndarray]] | None = None,
+) -> meshcat.Visualizer:
     """The animated robot view of the trajectory and rollout pages.
 
     ``q_frames`` (F, N) joint positions (rad) of the F animation frames, ``frame_dt`` (s) apart;
@@ -245,7 +263,9 @@ def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, fr
         visualizer[GROUND].set_transform(placement(np.array([centre[0], centre[1], -0.005])))
     else:
         for element in world_elements(robot.tool.name, world_frames[0]):
-            visualizer[f"{WORLD}/{element.path}"].set_object(element_geometry(element), element_material(element.colour))
+            visualizer[f"{WORLD}/{element.path}"].set_object(
+                element_geometry(element), element_material(element.colour)
+            )
             visualizer[f"{WORLD}/{element.path}"].set_transform(element.transform)
 
     robot_viz = load_geometry(visualizer, visual.model, visual.visual_model, ROBOT)
@@ -289,9 +309,13 @@ def _animated_view(robot: RobotModel, q_frames: np.ndarray, base: np.ndarray, fr
     return visualizer
 
 
-def trajectory_visualizer(robot: RobotModel, trajectory: TrajectoryResult,
-                          targets: PoseTargets | ToolPose | None = None, target_stride: int | None = None,
-                          triad_scale: float = 0.1) -> meshcat.Visualizer:
+def trajectory_visualizer(
+    robot: RobotModel,
+    trajectory: TrajectoryResult,
+    targets: PoseTargets | ToolPose | None = None,
+    target_stride: int | None = None,
+    triad_scale: float = 0.1,
+) -> meshcat.Visualizer:
     """A server-less visualizer holding the animated robot trajectory (see the module docstring).
 
     Args:
@@ -304,20 +328,33 @@ def trajectory_visualizer(robot: RobotModel, trajectory: TrajectoryResult,
     """
     q = _check_trajectory(robot, trajectory)
     arrays = None if targets is None else _target_arrays(targets, len(q) - 1)
-    return _animated_view(robot, q, trajectory.base, trajectory.dt, targets=arrays, target_stride=target_stride,
-                          triad_scale=triad_scale)
+    return _animated_view(
+        robot, q, trajectory.base, trajectory.dt, targets=arrays, target_stride=target_stride, triad_scale=triad_scale
+    )
 
 
-def trajectory_to_html(path: str | os.PathLike[str], robot: RobotModel, trajectory: TrajectoryResult,
-                       targets: PoseTargets | ToolPose | None = None, target_stride: int | None = None) -> Path:
+def trajectory_to_html(
+    path: str | os.PathLike[str],
+    robot: RobotModel,
+    trajectory: TrajectoryResult,
+    targets: PoseTargets | ToolPose | None = None,
+    target_stride: int | None = None,
+) -> Path:
     """Write :func:`trajectory_visualizer`'s animation as one self-contained HTML file (atomically)."""
     return save_html(trajectory_visualizer(robot, trajectory, targets, target_stride), path)
 
 
-def trajectory_in_scene_html(path: str | os.PathLike[str], robot: RobotModel, trajectory: TrajectoryResult,
-                             scene: Scene, params: SceneParams, rng: np.random.Generator,
-                             targets: PoseTargets | ToolPose | None = None, target_stride: int | None = None,
-                             triad_scale: float = 0.1) -> Path:
+def trajectory_in_scene_html(
+    path: str | os.PathLike[str],
+    robot: RobotModel,
+    trajectory: TrajectoryResult,
+    scene: Scene,
+    params: SceneParams,
+    rng: np.random.Generator,
+    targets: PoseTargets | ToolPose | None = None,
+    target_stride: int | None = None,
+    triad_scale: float = 0.1,
+) -> Path:
     """The robot's trajectory replayed in a 3D ``scene``, written as one self-contained HTML file.
 
     As :func:`toolimit.trajopt.execute_in_scene` does, the joints are resampled at the scene's
@@ -332,6 +369,15 @@ def trajectory_in_scene_html(path: str | os.PathLike[str], robot: RobotModel, tr
     q_control = resample_joints(q, trajectory.dt, scene.control_dt)
     positions, rotations = robot.tool_poses(q_control, trajectory.base)
     frames = replay_scene(scene, ToolPose(positions, rotations), params, rng)
-    visualizer = _animated_view(robot, q_control, trajectory.base, scene.control_dt, dt=trajectory.dt, targets=arrays,
-                                target_stride=target_stride, triad_scale=triad_scale, world_frames=frames)
+    visualizer = _animated_view(
+        robot,
+        q_control,
+        trajectory.base,
+        scene.control_dt,
+        dt=trajectory.dt,
+        targets=arrays,
+        target_stride=target_stride,
+        triad_scale=triad_scale,
+        world_frames=frames,
+    )
     return save_html(visualizer, path)

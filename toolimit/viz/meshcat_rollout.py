@@ -51,8 +51,13 @@ class Rollout:
     success: bool
 
 
-def record_rollout(task: LearningTask, policy: Policy | None = None, deterministic: bool = True, seed: int = 1000,
-                   scene_kwargs: dict[str, Any] | None = None) -> Rollout:
+def record_rollout(
+    task: LearningTask,
+    policy: Policy | None = None,
+    deterministic: bool = True,
+    seed: int = 1000,
+    scene_kwargs: dict[str, Any] | None = None,
+) -> Rollout:
     """Run one episode of ``task`` with ``policy`` (its mean if ``deterministic``), or with the
     tracking controller (the cloning expert) when ``policy`` is None; reset with ``seed``."""
     simulator = TaskSimulator(task, batch_size=1, scene_kwargs=scene_kwargs)
@@ -81,8 +86,10 @@ def rollout_html(path: str | os.PathLike[str], task: LearningTask, rollout: Roll
     robot = make_robot(task.robot, tool=task.tool)
     q = np.asarray(rollout.q, dtype=float)
     if q.ndim != 2 or q.shape[1] != robot.n_joints or len(q) != len(rollout.snapshots):
-        raise ValueError(f"rollout q must be (H+1, {robot.n_joints}) with one snapshot per row for {task.robot}, "
-                         f"got {q.shape} and {len(rollout.snapshots)} snapshots")
+        raise ValueError(
+            f"rollout q must be (H+1, {robot.n_joints}) with one snapshot per row for {task.robot}, "
+            f"got {q.shape} and {len(rollout.snapshots)} snapshots"
+        )
     if int(stride) != stride or stride < 1:
         raise ValueError(f"stride must be an integer >= 1, got {stride!r}")
     kept = np.unique(np.r_[np.arange(0, len(q), int(stride)), len(q) - 1])

@@ -284,7 +284,9 @@ def replay_scene(
             f"poses must be (T, 3) positions and (T, 3, 3) rotations, got {position.shape} and {rotation.shape}"
         )
     frames: list[dict[str, np.ndarray]] = []
-    replay(scene, params, rng, ToolPose(position, rotation), on_step=lambda _, stepped: frames.append(stepped.snapshot()))
+    replay(
+        scene, params, rng, ToolPose(position, rotation), on_step=lambda _, stepped: frames.append(stepped.snapshot())
+    )
     return frames
 
 

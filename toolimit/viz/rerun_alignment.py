@@ -76,9 +76,12 @@ def _log_alignment(recording: rr.RecordingStream, result: AlignmentResult, scene
         value = np.asarray(value, dtype=float)
         if value.shape == (3,):
             recording.log(
-                f"scene/params/{name}", rr.Points3D([value], radii=0.03, colors=ELEMENT_COLOUR, labels=[name]), static=True
+                f"scene/params/{name}",
+                rr.Points3D([value], radii=0.03, colors=ELEMENT_COLOUR, labels=[name]),
+                static=True,
             )
     scene = scene or make_scene(result.tool, result.world)
+
     def log_step(frame: int, stepped: Scene) -> None:
         position, rotation = poses.position[frame], poses.rotation[frame]
         recording.set_time("time", duration=frame * stepped.control_dt)

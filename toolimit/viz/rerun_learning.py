@@ -14,8 +14,13 @@ import rerun as rr
 
 from toolimit.viz.rerun_file import recording_file
 
-CURVES = {"return": "return_mean", "success_rate": "success_rate", "goal_reward": "goal_reward_mean",
-          "action_std": "action_std_mean", "approx_kl": "approx_kl"}
+CURVES = {
+    "return": "return_mean",
+    "success_rate": "success_rate",
+    "goal_reward": "goal_reward_mean",
+    "action_std": "action_std_mean",
+    "approx_kl": "approx_kl",
+}
 
 
 def save_learning_recording(curve_file: str | Path, path: str | Path) -> Path | None:

@@ -21,8 +21,9 @@ TARGET_COLOUR = (230, 120, 30)
 ROBOT_COLOUR = (60, 140, 230)
 
 
-def save_trajectory_recording(result: TrajectoryResult, robot: RobotModel, path: str | Path,
-                              target_positions: np.ndarray | None = None) -> Path | None:
+def save_trajectory_recording(
+    result: TrajectoryResult, robot: RobotModel, path: str | Path, target_positions: np.ndarray | None = None
+) -> Path | None:
     """Write the recording of ``result`` to ``path`` (.rrd); None when rerun is disabled.
 
     ``target_positions`` (T, 3) adds the target tool path beside the robot's.
@@ -34,13 +35,15 @@ def save_trajectory_recording(result: TrajectoryResult, robot: RobotModel, path:
     return Path(path)
 
 
-def _log_trajectory(recording: rr.RecordingStream, result: TrajectoryResult, robot: RobotModel,
-                    target_positions: np.ndarray | None) -> None:
+def _log_trajectory(
+    recording: rr.RecordingStream, result: TrajectoryResult, robot: RobotModel, target_positions: np.ndarray | None
+) -> None:
     tool_positions, _ = robot.tool_poses(result.q, result.base)
     recording.log("tool/robot", rr.LineStrips3D([tool_positions], colors=[ROBOT_COLOUR]), static=True)
     if target_positions is not None:
-        recording.log("tool/target", rr.LineStrips3D([np.asarray(target_positions)], colors=[TARGET_COLOUR]),
-                      static=True)
+        recording.log(
+            "tool/target", rr.LineStrips3D([np.asarray(target_positions)], colors=[TARGET_COLOUR]), static=True
+        )
     for t in range(len(result.q)):
         recording.set_time("time", duration=t * result.dt)
         if t >= 1:

@@ -109,10 +109,15 @@ class PlanarHammerScene:
         self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
         self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
-                "nail_position", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, self.protrusion),
-                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, MAX_NAIL_HEIGHT), on_ground=False, unit="m",
+                "nail_position",
+                "position",
+                (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, self.protrusion),
+                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, MAX_NAIL_HEIGHT),
+                on_ground=False,
+                unit="m",
                 description=f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
-                axes=(0, 2), bound_reason="the board surface, one protrusion below the nail's top, may not be "
+                axes=(0, 2),
+                bound_reason="the board surface, one protrusion below the nail's top, may not be "
                 "below the ground (z = 0)",
             ),
         )

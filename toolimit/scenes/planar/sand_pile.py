@@ -43,7 +43,11 @@ def configure_space(space: pymunk.Space, iterations: int, sleeping: bool = True)
 
 
 def add_tray(
-    space: pymunk.Space, centre_x: float, inner_half_width: float, wall_height: float, wall_thickness: float,
+    space: pymunk.Space,
+    centre_x: float,
+    inner_half_width: float,
+    wall_height: float,
+    wall_thickness: float,
     friction: float,
 ) -> None:
     """Two static walls standing on the ground at ``centre_x +- (inner_half_width + t/2)``, metres."""
@@ -55,8 +59,13 @@ def add_tray(
 
 
 def add_open_box(
-    space: pymunk.Space, centre_x: float, inner_half_width: float, wall_height: float, wall_thickness: float,
-    friction: float, mass: float,
+    space: pymunk.Space,
+    centre_x: float,
+    inner_half_width: float,
+    wall_height: float,
+    wall_thickness: float,
+    friction: float,
+    mass: float,
 ) -> pymunk.Body:
     """A dynamic open box (two walls, no floor, no rotation) of ``mass`` kg standing on the ground.
 
@@ -108,8 +117,13 @@ def settle(space: pymunk.Space, bodies: list[pymunk.Body], max_time: float, dt: 
 
 @lru_cache(maxsize=8)
 def settled_pile(
-    count: int, inner_half_width: float, wall_height: float, wall_thickness: float, material: SandMaterial,
-    dt: float, iterations: int,
+    count: int,
+    inner_half_width: float,
+    wall_height: float,
+    wall_thickness: float,
+    material: SandMaterial,
+    dt: float,
+    iterations: int,
 ) -> np.ndarray:
     """(count, 2) plane positions of a settled pile relative to the tray centre on the ground, m.
 

@@ -83,8 +83,13 @@ class PlanarScytheScene:
         self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
         self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
-                "grass_position", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m", axes=(0, 1),
+                "grass_position",
+                "position",
+                (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
+                on_ground=True,
+                unit="m",
+                axes=(0, 1),
                 description=f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
             ),
         )
@@ -136,8 +141,11 @@ class PlanarScytheScene:
         self._all_cut_at = np.where(done & ~np.isfinite(self._all_cut_at), self._time, self._all_cut_at)
 
     def _cut_swept_stalks(
-        self, previous: tuple[np.ndarray, np.ndarray], current: tuple[np.ndarray, np.ndarray],
-        start_position: np.ndarray, start_angle: np.ndarray,
+        self,
+        previous: tuple[np.ndarray, np.ndarray],
+        current: tuple[np.ndarray, np.ndarray],
+        start_position: np.ndarray,
+        start_angle: np.ndarray,
     ) -> None:
         """Mark stalks swept by the blade over this step, from its ``previous`` to its ``current`` 3D
         pose ((B, 3) m, (B, 3, 3)) (see the module docstring)."""
@@ -163,7 +171,7 @@ class PlanarScytheScene:
         (p0, r0), (p1, r1) = previous, current
         tip0 = p0[:, 2] + r0[:, 2, 0] * self._blade_points[1, 0]
         tip1 = p1[:, 2] + r1[:, 2, 0] * self._blade_points[1, 0]
-        time = (fractions[:-1, :, None] + weight / self.substeps)  # (S, B, M) fraction of the step
+        time = fractions[:-1, :, None] + weight / self.substeps  # (S, B, M) fraction of the step
         root_z = p0[:, 2][None, :, None] + time * (p1 - p0)[:, 2][None, :, None]
         tip_z = tip0[None, :, None] + time * (tip1 - tip0)[None, :, None]
         along_fraction = np.clip(s_cross / np.maximum(blade_length[None, :, None], 1e-9), 0.0, 1.0)

@@ -139,10 +139,26 @@ class PlanarSpadeScene:
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
         low, high = (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0), (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0)
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec("sand_position", "position", low, high, on_ground=True, unit="m",
-                          description="centre of the sand deposit tray on the ground (x used)", axes=(0,)),
-            ParameterSpec("goal_position", "position", low, high, on_ground=True, unit="m",
-                          description="centre of the open goal box on the ground (x used)", axes=(0,)),
+            ParameterSpec(
+                "sand_position",
+                "position",
+                low,
+                high,
+                on_ground=True,
+                unit="m",
+                description="centre of the sand deposit tray on the ground (x used)",
+                axes=(0,),
+            ),
+            ParameterSpec(
+                "goal_position",
+                "position",
+                low,
+                high,
+                on_ground=True,
+                unit="m",
+                description="centre of the open goal box on the ground (x used)",
+                axes=(0,),
+            ),
         )
         self.batch_size = 0
         # The state of the B instances, built by reset.
@@ -184,7 +200,12 @@ class PlanarSpadeScene:
         self.goal_x = float(np.asarray(params["goal_position"], dtype=float)[0])
         dt = self.control_dt / self.substeps
         pile = settled_pile(
-            self.sand_count, self.deposit_half_width, self.deposit_wall_height, WALL_THICKNESS, self.sand, dt,
+            self.sand_count,
+            self.deposit_half_width,
+            self.deposit_wall_height,
+            WALL_THICKNESS,
+            self.sand,
+            dt,
             self.solver_iterations,
         )
         self._spaces, self._sand_bodies, self._boxes = [], [], []
@@ -192,10 +213,21 @@ class PlanarSpadeScene:
             space = pymunk.Space()
             configure_space(space, self.solver_iterations, self.sleeping)
             add_ground(space, self.sand.friction)
-            add_tray(space, self.sand_x, self.deposit_half_width, self.deposit_wall_height, WALL_THICKNESS,
-                     self.sand.friction)
+            add_tray(
+                space,
+                self.sand_x,
+                self.deposit_half_width,
+                self.deposit_wall_height,
+                WALL_THICKNESS,
+                self.sand.friction,
+            )
             box = add_open_box(
-                space, self.goal_x, self.goal_half_width, self.goal_wall_height, WALL_THICKNESS, self.sand.friction,
+                space,
+                self.goal_x,
+                self.goal_half_width,
+                self.goal_wall_height,
+                WALL_THICKNESS,
+                self.sand.friction,
                 self.goal_box_mass,
             )
             jitter = rng.normal(0.0, self.sand_jitter, pile.shape)
@@ -305,11 +337,15 @@ class PlanarSpadeScene:
     def footprints(self, params: SceneParams) -> np.ndarray:
         """(2, 5) deposit and goal box rectangles (x, y, half-length, half-width, yaw), m/rad, where
         they stand at reset. The planar world spans the y axis, so the half-width is large (10 m)."""
-        sand_x, goal_x = (float(np.asarray(params[name], dtype=float)[0]) for name in ("sand_position", "goal_position"))
-        return np.array([
-            [sand_x, 0.0, self.deposit_half_width + WALL_THICKNESS, 10.0, 0.0],
-            [goal_x, 0.0, self.goal_half_width + WALL_THICKNESS, 10.0, 0.0],
-        ])
+        sand_x, goal_x = (
+            float(np.asarray(params[name], dtype=float)[0]) for name in ("sand_position", "goal_position")
+        )
+        return np.array(
+            [
+                [sand_x, 0.0, self.deposit_half_width + WALL_THICKNESS, 10.0, 0.0],
+                [goal_x, 0.0, self.goal_half_width + WALL_THICKNESS, 10.0, 0.0],
+            ]
+        )
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``sand`` (N, 3) world centres (y = 0), ``sand_radius`` (), ``walls`` (4, 2, 3)

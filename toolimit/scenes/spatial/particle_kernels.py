@@ -183,9 +183,32 @@ def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: i
 
 
 @_jit
-def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, box_centers, box_rotations,
-             box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
-             wall_rotations, wall_halves, wall_bounds, coefficients):  # type: ignore[no-untyped-def]
+def _project(
+    b,
+    previous,
+    predicted,
+    pairs,
+    n_pairs,
+    has_tool,
+    p0,
+    r0,
+    p1,
+    r1,
+    box_centers,
+    box_rotations,
+    box_halves,
+    box_bounds,
+    capsule_starts,
+    capsule_ends,
+    capsule_radii,
+    tool_low,
+    tool_high,
+    wall_centers,
+    wall_rotations,
+    wall_halves,
+    wall_bounds,
+    coefficients,
+):  # type: ignore[no-untyped-def]
     """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
     ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
     at its end), then the walls and the ground again without friction, so that static surfaces
@@ -201,12 +224,35 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
         depth = radius - predicted[b, i, 2]
         if depth > 0.0:
             predicted[b, i, 2] = radius
-            fx, fy, fz = _friction(predicted[b, i, 0] - previous[b, i, 0], predicted[b, i, 1] - previous[b, i, 1],
-                                   predicted[b, i, 2] - previous[b, i, 2], 0.0, 0.0, 1.0, depth, mu_s, mu_k)
+            fx, fy, fz = _friction(
+                predicted[b, i, 0] - previous[b, i, 0],
+                predicted[b, i, 1] - previous[b, i, 1],
+                predicted[b, i, 2] - previous[b, i, 2],
+                0.0,
+                0.0,
+                1.0,
+                depth,
+                mu_s,
+                mu_k,
+            )
             predicted[b, i, 0] += fx
             predicted[b, i, 1] += fy
-    _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius,
-                coefficients[MU_WALL_S], coefficients[MU_WALL_K], start, end, moved, scratch)
+    _walls_pass(
+        b,
+        previous,
+        predicted,
+        wall_centers,
+        wall_rotations,
+        wall_halves,
+        wall_bounds,
+        radius,
+        coefficients[MU_WALL_S],
+        coefficients[MU_WALL_K],
+        start,
+        end,
+        moved,
+        scratch,
+    )
     if has_tool:
         mu_s, mu_k = coefficients[MU_TOOL_S], coefficients[MU_TOOL_K]
         for i in range(n):
@@ -222,8 +268,9 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
                     outside = True
             if outside:
                 continue
-            _boxes_correction(start, end, box_centers, box_rotations, box_halves, box_bounds, radius, mu_s, mu_k, moved,
-                              scratch)
+            _boxes_correction(
+                start, end, box_centers, box_rotations, box_halves, box_bounds, radius, mu_s, mu_k, moved, scratch
+            )
             for a in range(3):
                 end[a] += moved[a]
             # Capsules (handles): closest-point contact, pushes summed, friction averaged.
@@ -234,8 +281,11 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
                 ay = capsule_ends[k, 1] - capsule_starts[k, 1]
                 az = capsule_ends[k, 2] - capsule_starts[k, 2]
                 length2 = max(ax * ax + ay * ay + az * az, 1e-18)
-                t = ((end[0] - capsule_starts[k, 0]) * ax + (end[1] - capsule_starts[k, 1]) * ay
-                     + (end[2] - capsule_starts[k, 2]) * az) / length2
+                t = (
+                    (end[0] - capsule_starts[k, 0]) * ax
+                    + (end[1] - capsule_starts[k, 1]) * ay
+                    + (end[2] - capsule_starts[k, 2]) * az
+                ) / length2
                 t = min(max(t, 0.0), 1.0)
                 ox = end[0] - capsule_starts[k, 0] - t * ax
                 oy = end[1] - capsule_starts[k, 1] - t * ay
@@ -247,8 +297,17 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
                 touching += 1
                 inv = 1.0 / max(distance, 1e-15)
                 nx, ny, nz = ox * inv, oy * inv, oz * inv
-                fx, fy, fz = _friction(end[0] + nx * depth - start[0], end[1] + ny * depth - start[1],
-                                       end[2] + nz * depth - start[2], nx, ny, nz, depth, mu_s, mu_k)
+                fx, fy, fz = _friction(
+                    end[0] + nx * depth - start[0],
+                    end[1] + ny * depth - start[1],
+                    end[2] + nz * depth - start[2],
+                    nx,
+                    ny,
+                    nz,
+                    depth,
+                    mu_s,
+                    mu_k,
+                )
                 ex, ey, ez = ex + nx * depth, ey + ny * depth, ez + nz * depth
                 gx, gy, gz = gx + fx, gy + fy, gz + fz
             share = 1.0 / max(touching, 1)
@@ -258,25 +317,53 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, b
             for c in range(3):
                 predicted[b, i, c] += r1[b, c, 0] * moved[0] + r1[b, c, 1] * moved[1] + r1[b, c, 2] * moved[2]
 
-
     # ... and their normal constraints after it: the walls, then the ground's hard limit, win.
-    _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, 0.0, 0.0,
-                start, end, moved, scratch)
+    _walls_pass(
+        b,
+        previous,
+        predicted,
+        wall_centers,
+        wall_rotations,
+        wall_halves,
+        wall_bounds,
+        radius,
+        0.0,
+        0.0,
+        start,
+        end,
+        moved,
+        scratch,
+    )
     for i in range(n):
         predicted[b, i, 2] = max(predicted[b, i, 2], radius)
 
 
 @_inline
-def _walls_pass(b, previous, predicted, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k,
-                start, end, moved, scratch):  # type: ignore[no-untyped-def]
+def _walls_pass(
+    b,
+    previous,
+    predicted,
+    wall_centers,
+    wall_rotations,
+    wall_halves,
+    wall_bounds,
+    radius,
+    mu_s,
+    mu_k,
+    start,
+    end,
+    moved,
+    scratch,
+):  # type: ignore[no-untyped-def]
     """Contacts of instance b's spheres with the walls (friction mu_s, mu_k), in place."""
     if wall_centers.shape[0] == 0:
         return
     for i in range(predicted.shape[1]):
         for a in range(3):
             start[a], end[a] = previous[b, i, a], predicted[b, i, a]
-        if _boxes_correction(start, end, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k,
-                             moved, scratch):
+        if _boxes_correction(
+            start, end, wall_centers, wall_rotations, wall_halves, wall_bounds, radius, mu_s, mu_k, moved, scratch
+        ):
             for a in range(3):
                 predicted[b, i, a] += moved[a]
 
@@ -354,10 +441,35 @@ def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: i
 
 
 @_jit
-def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, first_substep, h, has_tool,
-            path_positions, path_rotations, box_centers, box_rotations, box_halves, box_bounds, capsule_starts, capsule_ends,
-            capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, wall_bounds, coefficients,
-            freeze_after):  # type: ignore[no-untyped-def]
+def advance(
+    positions,
+    carried,
+    velocities,
+    built_at,
+    pairs,
+    n_pairs,
+    resting,
+    first_substep,
+    h,
+    has_tool,
+    path_positions,
+    path_rotations,
+    box_centers,
+    box_rotations,
+    box_halves,
+    box_bounds,
+    capsule_starts,
+    capsule_ends,
+    capsule_radii,
+    tool_low,
+    tool_high,
+    wall_centers,
+    wall_rotations,
+    wall_halves,
+    wall_bounds,
+    coefficients,
+    freeze_after,
+):  # type: ignore[no-untyped-def]
     """Sub-steps ``first_substep`` .. S-1 of length h (s) for all instances, the tool moving along
     ``path_positions`` (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3). Updates the state arrays in
     place. Returns -1 when done, or the sub-step at which ``pairs`` proved too small (nothing of
@@ -371,16 +483,42 @@ def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, f
             return s
         p0, r0, p1, r1 = path_positions[s], path_rotations[s], path_positions[s + 1], path_rotations[s + 1]
         for b in range(n_batch):
-            if freeze_after > 0 and resting[b] >= freeze_after and (
-                    not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high)):
+            if (
+                freeze_after > 0
+                and resting[b] >= freeze_after
+                and (not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high))
+            ):
                 continue  # island sleeping: this instance is at rest and untouched
             for i in range(n):
                 carried[b, i, 2] -= gravity * h
                 for a in range(3):
                     predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
-            _project(b, positions, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, box_centers, box_rotations,
-                     box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers,
-                     wall_rotations, wall_halves, wall_bounds, coefficients)
+            _project(
+                b,
+                positions,
+                predicted,
+                pairs,
+                n_pairs,
+                has_tool,
+                p0,
+                r0,
+                p1,
+                r1,
+                box_centers,
+                box_rotations,
+                box_halves,
+                box_bounds,
+                capsule_starts,
+                capsule_ends,
+                capsule_radii,
+                tool_low,
+                tool_high,
+                wall_centers,
+                wall_rotations,
+                wall_halves,
+                wall_bounds,
+                coefficients,
+            )
             awake_any = False
             for i in range(n):
                 dx = predicted[b, i, 0] - positions[b, i, 0]
@@ -405,9 +543,29 @@ def advance(positions, carried, velocities, built_at, pairs, n_pairs, resting, f
 
 
 @_jit
-def place(positions, built_at, pairs, n_pairs, iterations, tool_position, tool_rotation, box_centers, box_rotations,
-          box_halves, box_bounds, capsule_starts, capsule_ends, capsule_radii, tool_low, tool_high, wall_centers, wall_rotations,
-          wall_halves, wall_bounds, coefficients):  # type: ignore[no-untyped-def]
+def place(
+    positions,
+    built_at,
+    pairs,
+    n_pairs,
+    iterations,
+    tool_position,
+    tool_rotation,
+    box_centers,
+    box_rotations,
+    box_halves,
+    box_bounds,
+    capsule_starts,
+    capsule_ends,
+    capsule_radii,
+    tool_low,
+    tool_high,
+    wall_centers,
+    wall_rotations,
+    wall_halves,
+    wall_bounds,
+    coefficients,
+):  # type: ignore[no-untyped-def]
     """``iterations`` position-only passes over all contacts with the tool still at its pose
     (B, 3), (B, 3, 3). Returns False if ``pairs`` proved too small (grow it and call again)."""
     predicted = positions.copy()
@@ -415,8 +573,31 @@ def place(positions, built_at, pairs, n_pairs, iterations, tool_position, tool_r
         if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
             return False
         for b in range(positions.shape[0]):
-            _project(b, positions, predicted, pairs, n_pairs, True, tool_position, tool_rotation, tool_position,
-                     tool_rotation, box_centers, box_rotations, box_halves, box_bounds, capsule_starts, capsule_ends,
-                     capsule_radii, tool_low, tool_high, wall_centers, wall_rotations, wall_halves, wall_bounds, coefficients)
+            _project(
+                b,
+                positions,
+                predicted,
+                pairs,
+                n_pairs,
+                True,
+                tool_position,
+                tool_rotation,
+                tool_position,
+                tool_rotation,
+                box_centers,
+                box_rotations,
+                box_halves,
+                box_bounds,
+                capsule_starts,
+                capsule_ends,
+                capsule_radii,
+                tool_low,
+                tool_high,
+                wall_centers,
+                wall_rotations,
+                wall_halves,
+                wall_bounds,
+                coefficients,
+            )
         positions[...] = predicted
     return True

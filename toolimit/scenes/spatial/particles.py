@@ -198,11 +198,20 @@ class ParticleWorld:
         self.tool = tool
         self._coefficients = material.coefficients()
         self._freeze_after = 0 if material.freeze_after_substeps is None else int(material.freeze_after_substeps)
-        walls = static_boxes if static_boxes is not None else StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)),
-                                                                          np.zeros((0, 3)))
-        self._walls = tuple(np.ascontiguousarray(a, dtype=float) for a in (
-            walls.centers, walls.rotations, walls.half_extents,
-            _box_bounds(walls.centers, walls.rotations, walls.half_extents, material.radius)))
+        walls = (
+            static_boxes
+            if static_boxes is not None
+            else StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
+        )
+        self._walls = tuple(
+            np.ascontiguousarray(a, dtype=float)
+            for a in (
+                walls.centers,
+                walls.rotations,
+                walls.half_extents,
+                _box_bounds(walls.centers, walls.rotations, walls.half_extents, material.radius),
+            )
+        )
         self.positions = np.zeros((0, 0, 3))
         self.velocities = np.zeros((0, 0, 3))
         self._carried = np.zeros((0, 0, 3))  # velocity the solver predicts with (see the module docstring)
@@ -223,11 +232,29 @@ class ParticleWorld:
             low = points.min(axis=0) - material.radius
             high = points.max(axis=0) + material.radius
             bounds = _box_bounds(tool.box_centers, tool.box_rotations, tool.box_half_extents, material.radius)
-            arrays = (tool.box_centers, tool.box_rotations, tool.box_half_extents, bounds, tool.capsule_starts,
-                      tool.capsule_ends, tool.capsule_radii, low, high)
+            arrays = (
+                tool.box_centers,
+                tool.box_rotations,
+                tool.box_half_extents,
+                bounds,
+                tool.capsule_starts,
+                tool.capsule_ends,
+                tool.capsule_radii,
+                low,
+                high,
+            )
         else:
-            arrays = (np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 2, 3)), np.zeros((0, 3)),
-                      np.zeros((0, 3)), np.zeros(0), np.zeros(3), np.zeros(3))
+            arrays = (
+                np.zeros((0, 3)),
+                np.zeros((0, 3, 3)),
+                np.zeros((0, 3)),
+                np.zeros((0, 2, 3)),
+                np.zeros((0, 3)),
+                np.zeros((0, 3)),
+                np.zeros(0),
+                np.zeros(3),
+                np.zeros(3),
+            )
         #: Tool shapes as the kernels take them (tool frame) and the tool's bounds grown by r.
         self._tool_arrays = tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
 
@@ -275,8 +302,7 @@ class ParticleWorld:
 
     def update_pairs(self) -> None:
         """Bring the Verlet lists up to date (the solver does it at every sub-step)."""
-        while not kernels.update_pairs(self.positions, self._built_at, self._pairs, self._n_pairs,
-                                       self._coefficients):
+        while not kernels.update_pairs(self.positions, self._built_at, self._pairs, self._n_pairs, self._coefficients):
             self._grow_pairs()
 
     # ------------------------------------------------------------------------------------------ tool
@@ -297,9 +323,18 @@ class ParticleWorld:
         if not np.any(np.all((local > low) & (local < high), axis=-1)):
             return  # nothing near the tool: leave the spheres exactly where they are
         self._resting[:] = 0
-        while not kernels.place(self.positions, self._built_at, self._pairs, self._n_pairs, int(iterations),
-                                self.tool_position, self.tool_rotation, *self._tool_arrays, *self._walls,
-                                self._coefficients):
+        while not kernels.place(
+            self.positions,
+            self._built_at,
+            self._pairs,
+            self._n_pairs,
+            int(iterations),
+            self.tool_position,
+            self.tool_rotation,
+            *self._tool_arrays,
+            *self._walls,
+            self._coefficients,
+        ):
             self._grow_pairs()
 
     # ------------------------------------------------------------------------------------- simulation
@@ -336,9 +371,22 @@ class ParticleWorld:
         first = 0
         while True:
             first = kernels.advance(
-                self.positions, self._carried, self.velocities, self._built_at, self._pairs, self._n_pairs,
-                self._resting, first, h, has_tool, path_positions, path_rotations, *self._tool_arrays, *self._walls,
-                self._coefficients, self._freeze_after,
+                self.positions,
+                self._carried,
+                self.velocities,
+                self._built_at,
+                self._pairs,
+                self._n_pairs,
+                self._resting,
+                first,
+                h,
+                has_tool,
+                path_positions,
+                path_rotations,
+                *self._tool_arrays,
+                *self._walls,
+                self._coefficients,
+                self._freeze_after,
             )
             if first < 0:
                 return

@@ -75,9 +75,7 @@ def capsule_signed_distance(
     return axis_distance - radius, normal
 
 
-def posed_tool_shapes(
-    shapes: ToolShapes, position: np.ndarray, rotation: np.ndarray
-) -> dict[str, np.ndarray]:
+def posed_tool_shapes(shapes: ToolShapes, position: np.ndarray, rotation: np.ndarray) -> dict[str, np.ndarray]:
     """World-frame tool shapes for tool poses ``position`` (..., 3), ``rotation`` (..., 3, 3).
 
     Returns ``box_centers`` (..., K, 3), ``box_rotations`` (..., K, 3, 3), ``box_half_extents`` (K, 3),

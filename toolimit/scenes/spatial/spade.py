@@ -119,8 +119,16 @@ DEPOSIT_REGION_RADIUS, DEPOSIT_REGION_HEIGHT = 0.4, 0.3
 #: friction 5), PhysX-averaged sphere-spade and sphere-ground friction 2.5, sphere-wall 3, speed
 #: capped at 1 m/s.
 AUTHORS_SAND = GranularMaterial(
-    radius=0.02, mu_static=5.0, mu_kinetic=5.0, tool_mu_static=2.5, tool_mu_kinetic=2.5,
-    ground_mu_static=2.5, ground_mu_kinetic=2.5, wall_mu_static=3.0, wall_mu_kinetic=3.0, max_speed=1.0,
+    radius=0.02,
+    mu_static=5.0,
+    mu_kinetic=5.0,
+    tool_mu_static=2.5,
+    tool_mu_kinetic=2.5,
+    ground_mu_static=2.5,
+    ground_mu_kinetic=2.5,
+    wall_mu_static=3.0,
+    wall_mu_kinetic=3.0,
+    max_speed=1.0,
 )
 
 
@@ -151,11 +159,16 @@ def settled_heap(n_spheres: int, material: GranularMaterial, substeps: int = 10)
     fits the deposit. Raises RuntimeError if it does not come to rest.
     """
     rng = np.random.default_rng(0)
-    start = np.column_stack([
-        np.clip(rng.normal(0.0, HEAP_DROP_SIGMA, (n_spheres, 2)), -HEAP_PEN / 2 + material.radius,
-                HEAP_PEN / 2 - material.radius),
-        material.radius + 0.01 + HEAP_DROP_SPACING * np.arange(n_spheres),
-    ])
+    start = np.column_stack(
+        [
+            np.clip(
+                rng.normal(0.0, HEAP_DROP_SIGMA, (n_spheres, 2)),
+                -HEAP_PEN / 2 + material.radius,
+                HEAP_PEN / 2 - material.radius,
+            ),
+            material.radius + 0.01 + HEAP_DROP_SPACING * np.arange(n_spheres),
+        ]
+    )
     centers, halves = _walls(HEAP_PEN, 2 * material.radius * n_spheres, ("-x", "+x", "-y", "+y"))
     pen = StaticBoxes(centers, np.repeat(np.eye(3)[None], 4, 0), halves)
     world = ParticleWorld(material, pen, None)
@@ -169,6 +182,7 @@ def settled_heap(n_spheres: int, material: GranularMaterial, substeps: int = 10)
 
 def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two ground rectangles (cx, cy, half_length, half_width, yaw) overlap (separating axes)."""
+
     def corners(rect: np.ndarray) -> np.ndarray:
         cx, cy, hl, hw, yaw = rect
         local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
@@ -215,18 +229,32 @@ class SpatialSpadeScene:
         self.shapes = tool_shapes("spade")
         self.parameters: tuple[ParameterSpec, ...] = (
             ParameterSpec(
-                "sand_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
-                description="centre of the sand deposit's floor", axes=(0, 1),
+                "sand_position",
+                "position",
+                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
+                on_ground=True,
+                unit="m",
+                description="centre of the sand deposit's floor",
+                axes=(0, 1),
             ),
             ParameterSpec(
-                "sand_yaw", "uniform", low=-np.pi, high=np.pi, unit="rad",
+                "sand_yaw",
+                "uniform",
+                low=-np.pi,
+                high=np.pi,
+                unit="rad",
                 description="yaw of the deposit (its open side faces its +y)",
             ),
             ParameterSpec(
-                "goal_position", "position", low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
-                description="centre of the goal box's floor", axes=(0, 1),
+                "goal_position",
+                "position",
+                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
+                on_ground=True,
+                unit="m",
+                description="centre of the goal box's floor",
+                axes=(0, 1),
             ),
         )
         self.batch_size = 0
@@ -242,10 +270,12 @@ class SpatialSpadeScene:
         sand, goal = np.asarray(params["sand_position"], float), np.asarray(params["goal_position"], float)
         deposit_half = DEPOSIT_INNER / 2 + WALL_THICKNESS
         goal_half = GOAL_INNER / 2 + WALL_THICKNESS
-        return np.array([
-            [sand[0], sand[1], deposit_half, deposit_half, float(params["sand_yaw"])],
-            [goal[0], goal[1], goal_half, goal_half, 0.0],
-        ])
+        return np.array(
+            [
+                [sand[0], sand[1], deposit_half, deposit_half, float(params["sand_yaw"])],
+                [goal[0], goal[1], goal_half, goal_half, 0.0],
+            ]
+        )
 
     def invalid_reason(self, params: SceneParams) -> str | None:
         """Why ``params`` cannot make this scene (against the specs, overlap), or None."""
@@ -269,8 +299,9 @@ class SpatialSpadeScene:
         deposit_centers, deposit_halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, ("-x", "+x", "-y"))
         goal_centers, goal_halves = _walls(GOAL_INNER, GOAL_WALL_HEIGHT, ("-x", "+x", "-y", "+y"))
         self.walls = StaticBoxes(
-            centers=np.concatenate([self.sand_position + deposit_centers @ deposit_rotation.T,
-                                    self.goal_position + goal_centers]),
+            centers=np.concatenate(
+                [self.sand_position + deposit_centers @ deposit_rotation.T, self.goal_position + goal_centers]
+            ),
             rotations=np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
             half_extents=np.concatenate([deposit_halves, goal_halves]),
         )
@@ -324,8 +355,10 @@ class SpatialSpadeScene:
         offset = self._require_reset().positions - self.goal_position
         half = GOAL_INNER / 2
         return (
-            (np.abs(offset[..., 0]) < half) & (np.abs(offset[..., 1]) < half)
-            & (offset[..., 2] >= 0.0) & (offset[..., 2] <= GOAL_REGION_HEIGHT)
+            (np.abs(offset[..., 0]) < half)
+            & (np.abs(offset[..., 1]) < half)
+            & (offset[..., 2] >= 0.0)
+            & (offset[..., 2] <= GOAL_REGION_HEIGHT)
         )
 
     def spheres_on_spade(self) -> np.ndarray:
@@ -335,8 +368,10 @@ class SpatialSpadeScene:
             return np.zeros((self.batch_size, self.n_spheres), dtype=bool)
         local = np.einsum("bnj,bja->bna", world.positions - world.tool_position[:, None], world.tool_rotation)
         return (
-            (local[..., 0] > 0.0) & (local[..., 0] < SPADE_RIM_HEIGHT + self.material.radius)
-            & (np.abs(local[..., 1]) < SPADE_BLADE_WIDTH / 2) & (local[..., 2] > 0.0)
+            (local[..., 0] > 0.0)
+            & (local[..., 0] < SPADE_RIM_HEIGHT + self.material.radius)
+            & (np.abs(local[..., 1]) < SPADE_BLADE_WIDTH / 2)
+            & (local[..., 2] > 0.0)
             & (local[..., 2] < SPADE_BLADE_LENGTH)
         )
 
