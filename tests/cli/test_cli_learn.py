@@ -33,6 +33,7 @@ def test_learn_from_a_registered_id_then_evaluate(tmp_path, capsys):
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--robot", "ur5"],
      "no shipped task for the spade in planar with robot ur5"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--action-std", "0"], "--action-std: must be a finite number > 0"),
     (["evaluate", "--policy", "absent"], "--policy: no such folder"),
     (["run", "--tool", "spade", "--robot", "panda", "--demo", "absent.npz", "--time-scale", "slow"],
      "--time-scale: expected positive numbers"),

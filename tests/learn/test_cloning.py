@@ -6,8 +6,8 @@ import numpy as np
 import torch
 
 from toolimit.learn import BatchedTaskVecEnv
-from toolimit.learn.cloning import (action_mean, authors_action_std, clone, collect_demonstrations,
-                                    discounted_returns, fix_action_std, mean_action_loss)
+from toolimit.learn.cloning import (action_mean, clone, collect_demonstrations, discounted_returns, fix_action_std,
+                                    mean_action_loss, normalised_action_std)
 from toolimit.learn.ppo import PRESETS, make_ppo
 
 
@@ -50,7 +50,15 @@ def test_std_is_the_authors_fixed_value(spade_task):
     assert not model.policy.log_std.requires_grad
     fix_action_std(model.policy, np.full(3, 0.5))
     np.testing.assert_allclose(torch.exp(model.policy.log_std).detach().numpy(), 0.5, rtol=1e-6)
-    np.testing.assert_allclose(authors_action_std(np.array([2.0, 4.0])), [0.1, 0.05])
+    np.testing.assert_allclose(normalised_action_std(np.array([2.0, 4.0])), [0.1, 0.05])
+    np.testing.assert_allclose(normalised_action_std(np.array([2.0, 4.0]), 0.05), [0.025, 0.0125])
+
+
+def test_std_can_be_set_in_rad_per_s(spade_task):
+    env = BatchedTaskVecEnv(spade_task, 2, seed=0)
+    model = make_ppo(env, PRESETS["authors"], seed=0, action_std=0.05)
+    std = torch.exp(model.policy.log_std).detach().numpy()
+    np.testing.assert_allclose(std, 0.05 / env.simulator.robot.velocity_limit, rtol=1e-6)
 
 
 def test_cloning_reduces_both_losses_and_keeps_the_std(spade_task):

@@ -63,6 +63,13 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | Non
         default=2000,
         help="Adam steps of the value network's warm-up after cloning (default: 2000)",
     )
+    parser.add_argument(
+        "--action-std",
+        type=float,
+        default=0.2,
+        help="the policy's standard deviation on every joint, rad/s: fixed after cloning, the start of the "
+        "learned one with --no-clone (default: 0.2, the authors')",
+    )
     parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
 
@@ -84,6 +91,8 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
             raise CliError(f"{flag}: must be an integer >= {low}, got {value}")
     if not 0.0 <= args.clone_noise < float("inf"):
         raise CliError(f"--clone-noise: must be a finite number >= 0, got {args.clone_noise}")
+    if not 0.0 < args.action_std < float("inf"):
+        raise CliError(f"--action-std: must be a finite number > 0 (rad/s), got {args.action_std}")
     return LearningConfig(
         timesteps=args.timesteps,
         envs=args.envs,
@@ -93,6 +102,7 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
         clone_noise=args.clone_noise,
         clone_steps=args.clone_steps,
         value_steps=args.value_steps,
+        action_std=args.action_std,
         checkpoint_every=args.checkpoint_every,
         seed=args.seed,
         scene_kwargs=scene_kwargs,

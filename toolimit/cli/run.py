@@ -184,6 +184,8 @@ def run(args: argparse.Namespace) -> int:
                 str(args.clone_steps),
                 "--value-steps",
                 str(args.value_steps),
+                "--action-std",
+                str(args.action_std),
                 "--checkpoint-every",
                 str(args.checkpoint_every),
                 "--seed",

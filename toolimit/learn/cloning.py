@@ -119,9 +119,10 @@ def fix_action_std(policy: ActorCriticPolicy, std: np.ndarray) -> None:
     policy.log_std.requires_grad_(False)
 
 
-def authors_action_std(velocity_limit: np.ndarray) -> np.ndarray:
-    """(N,) the authors' 0.2 rad/s as a fraction of each joint's velocity limit (rad/s)."""
-    return AUTHORS_ACTION_STD / np.asarray(velocity_limit, dtype=float)
+def normalised_action_std(velocity_limit: np.ndarray, std: float = AUTHORS_ACTION_STD) -> np.ndarray:
+    """(N,) a joint-velocity standard deviation ``std`` (rad/s; the authors' 0.2 by default) as a
+    fraction of each joint's velocity limit (rad/s), the policy's action units."""
+    return std / np.asarray(velocity_limit, dtype=float)
 
 
 @dataclass(frozen=True)

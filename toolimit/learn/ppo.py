@@ -27,7 +27,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
 from toolimit.artifacts import atomic_path, save_json
-from toolimit.learn.cloning import authors_action_std, fix_action_std
+from toolimit.learn.cloning import AUTHORS_ACTION_STD, fix_action_std, normalised_action_std
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
 CHECKPOINT_ZIP = "checkpoint.zip"
@@ -74,11 +74,17 @@ PRESETS: dict[str, PpoSettings] = {
 }
 
 
-def make_ppo(env: BatchedTaskVecEnv, settings: PpoSettings, seed: int = 0, learn_std: bool = False) -> PPO:
-    """A PPO model on ``env`` with the paper's policy; its standard deviation is the authors' 0.2
-    rad/s, frozen unless ``learn_std`` (the baselines without cloning)."""
-    velocity_limit = env.simulator.robot.velocity_limit
-    std = authors_action_std(velocity_limit)
+def make_ppo(
+    env: BatchedTaskVecEnv,
+    settings: PpoSettings,
+    seed: int = 0,
+    learn_std: bool = False,
+    action_std: float = AUTHORS_ACTION_STD,
+) -> PPO:
+    """A PPO model on ``env`` with the paper's policy; its standard deviation is ``action_std``
+    rad/s (the authors' 0.2) on every joint, frozen unless ``learn_std`` (the baselines without
+    cloning)."""
+    std = normalised_action_std(env.simulator.robot.velocity_limit, action_std)
     n_steps = settings.episodes_per_update * env.simulator.horizon
     model = PPO(
         "MlpPolicy",

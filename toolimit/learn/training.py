@@ -23,7 +23,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 
 from toolimit.artifacts import save_json
-from toolimit.learn.cloning import clone, collect_demonstrations
+from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
     POLICY_ZIP,
@@ -54,6 +54,8 @@ class LearningConfig:
         clone_rollouts: tracking-controller rollouts (1 = the authors' single rollout).
         clone_noise: std of the action noise of rollouts 1.. (normalised units), relabelled.
         clone_steps, value_steps: Adam steps of cloning and of the value warm-up.
+        action_std: the policy's standard deviation on every joint, rad/s (fixed after cloning,
+            the start of the learned one without).
         checkpoint_every: updates between checkpoints.
         seed: seeds everything (environments, torch, PPO).
         scene_kwargs: the scene's constructor arguments.
@@ -70,6 +72,7 @@ class LearningConfig:
     clone_noise: float = 0.0
     clone_steps: int = 6000
     value_steps: int = 2000
+    action_std: float = AUTHORS_ACTION_STD
     checkpoint_every: int = 5
     seed: int = 0
     scene_kwargs: dict[str, Any] | None = None
@@ -184,7 +187,7 @@ def _learn_policy(
     cloning_record: dict[str, Any] = {}
 
     def start() -> PPO:
-        model = make_ppo(env, settings, seed=config.seed, learn_std=not config.clone)
+        model = make_ppo(env, settings, seed=config.seed, learn_std=not config.clone, action_std=config.action_std)
         if config.clone:
             cloning_record.update(_clone(model, task, config, settings, progress))
             save_json(out_dir / CLONING_JSON, cloning_record)
