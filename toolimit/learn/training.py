@@ -142,7 +142,7 @@ class _Curve(BaseCallback):
             return
         logged = self.model.logger.name_to_value
         record = self.pending | {
-            "action_std_mean": float(torch.exp(cast(torch.Tensor, self.model.policy.log_std)).mean()),
+            "action_std_mean": float(torch.exp(cast(torch.Tensor, self.model.policy.log_std).detach()).mean()),
             "approx_kl": float(logged.get("train/approx_kl", float("nan"))),
         }
         with open(self.path, "a") as handle:
