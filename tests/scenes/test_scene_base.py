@@ -3,7 +3,13 @@
 import numpy as np
 import pytest
 
-from toolimit.scenes.base import WORLD_HALF_SIZE, ParameterSpec, SuccessTracker, parameter_violation
+from toolimit.scenes.base import (
+    WORLD_HALF_SIZE,
+    ParameterSpec,
+    SuccessTracker,
+    parameter_violation,
+    world_position,
+)
 
 SPECS = (
     ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.1), (WORLD_HALF_SIZE,) * 2 + (2.0,),
@@ -24,6 +30,15 @@ GOOD = {"box": np.array([1.0, 9.0, 0.5]), "yaw": 0.3}  # y is not one of the che
 def test_parameter_violation_names_the_parameter_the_axis_and_the_bound(change, message):
     reason = parameter_violation(SPECS, {**GOOD, **change})
     assert reason is None if message is None else message in reason
+
+
+def test_world_position_spans_the_world_in_x_y_and_stands_on_the_ground_unless_raised():
+    ground = world_position("box", "a box", axes=(0, 1))
+    assert ground == ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                                   (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
+                                   description="a box", axes=(0, 1))
+    raised = world_position("box", "a box", low_z=0.1, high_z=2.0, axes=(0, 2), bound_reason="above the floor")
+    assert not raised.on_ground and raised.low == SPECS[0].low and raised.high == SPECS[0].high
 
 
 def test_parameter_violation_names_a_missing_parameter():

@@ -67,6 +67,30 @@ class ParameterSpec:
     bound_reason: str = ""
 
 
+def world_position(
+    name: str,
+    description: str,
+    low_z: float = 0.0,
+    high_z: float = 0.0,
+    axes: tuple[int, ...] = (0, 1, 2),
+    bound_reason: str = "",
+) -> ParameterSpec:
+    """A ``"position"`` spec (unit m) whose x and y may be anywhere in the world (within
+    +-``WORLD_HALF_SIZE``) and whose z lies in [``low_z``, ``high_z``]; the default z = 0 is an
+    element standing on the ground (alignment then sets z = 0)."""
+    return ParameterSpec(
+        name,
+        "position",
+        low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, low_z),
+        high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, high_z),
+        on_ground=low_z == high_z == 0.0,
+        unit="m",
+        description=description,
+        axes=axes,
+        bound_reason=bound_reason,
+    )
+
+
 @runtime_checkable
 class Scene(Protocol):
     """What every scene offers. See the module docstring for frames and batching.

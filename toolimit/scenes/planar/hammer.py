@@ -37,12 +37,12 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     check_reset,
     parameter_violation,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool, plane_point
 from toolimit.tools import ToolPose, tool_spec
@@ -108,14 +108,11 @@ class PlanarHammerScene:
         self._head_corners = corners  # (8, 3) tool frame, m
         self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "nail_position",
-                "position",
-                (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, self.protrusion),
-                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, MAX_NAIL_HEIGHT),
-                on_ground=False,
-                unit="m",
-                description=f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
+                f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
+                low_z=self.protrusion,
+                high_z=MAX_NAIL_HEIGHT,
                 axes=(0, 2),
                 bound_reason="the board surface, one protrusion below the nail's top, may not be "
                 "below the ground (z = 0)",

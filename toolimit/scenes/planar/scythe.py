@@ -31,12 +31,12 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     check_reset,
     parameter_violation,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
@@ -82,15 +82,10 @@ class PlanarScytheScene:
         self.success_window = float(success_window)
         self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "grass_position",
-                "position",
-                (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
+                f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
                 axes=(0, 1),
-                description=f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
             ),
         )
         self.batch_size = 0

@@ -42,13 +42,13 @@ import pymunk.batch
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     SuccessTracker,
     check_reset,
     parameter_violation,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool, plane_point
 from toolimit.scenes.planar.sand_pile import (
@@ -137,28 +137,9 @@ class PlanarSpadeScene:
         self.sleeping = bool(sleeping)
         spec = tool_spec("spade")
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
-        low, high = (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0), (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0)
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
-                "sand_position",
-                "position",
-                low,
-                high,
-                on_ground=True,
-                unit="m",
-                description="centre of the sand deposit tray on the ground (x used)",
-                axes=(0,),
-            ),
-            ParameterSpec(
-                "goal_position",
-                "position",
-                low,
-                high,
-                on_ground=True,
-                unit="m",
-                description="centre of the open goal box on the ground (x used)",
-                axes=(0,),
-            ),
+            world_position("sand_position", "centre of the sand deposit tray on the ground (x used)", axes=(0,)),
+            world_position("goal_position", "centre of the open goal box on the ground (x used)", axes=(0,)),
         )
         self.batch_size = 0
         # The state of the B instances, built by reset.

@@ -26,7 +26,6 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     batched_pose,
@@ -35,6 +34,7 @@ from toolimit.scenes.base import (
     require_counts,
     require_positive,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import interpolate_poses, tool_snapshot
@@ -137,15 +137,11 @@ class SpatialHammerScene:
         self.head_points = head.center + box_surface_points(head.half_extents) @ head.rotation.T
         lowest_head_top = self.plate_thickness + self.protrusion
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "nail_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, lowest_head_top),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 1.5),
-                on_ground=False,
-                unit="m",
-                description="initial top of the nail head (the board's top is "
-                f"{lowest_head_top * 1000:.0f} mm below it)",
+                f"initial top of the nail head (the board's top is {lowest_head_top * 1000:.0f} mm below it)",
+                low_z=lowest_head_top,
+                high_z=1.5,
                 bound_reason="the board under the nail must stand on the ground",
             ),
         )

@@ -23,7 +23,6 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     batched_pose,
@@ -32,6 +31,7 @@ from toolimit.scenes.base import (
     require_counts,
     require_positive,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
@@ -146,14 +146,9 @@ class SpatialScytheScene:
         self.edge = np.array([[blade.center[0] - extent, 0.0, 0.0], [blade.center[0] + extent, 0.0, 0.0]])
         self.blade_length = 2.0 * extent
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "grass_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
-                description="centre of the grass patch on the ground",
+                "centre of the grass patch on the ground",
                 bound_reason="the patch lies on the ground, z = 0",
             ),
             ParameterSpec(

@@ -66,7 +66,6 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
     SceneParams,
     SuccessTracker,
@@ -75,6 +74,7 @@ from toolimit.scenes.base import (
     parameter_violation,
     require_counts,
     require_positive,
+    world_position,
 )
 from toolimit.scenes.spatial.particles import (
     GranularMaterial,
@@ -228,16 +228,7 @@ class SpatialSpadeScene:
         self.control_dt = float(control_dt)
         self.shapes = tool_shapes("spade")
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
-                "sand_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
-                description="centre of the sand deposit's floor",
-                axes=(0, 1),
-            ),
+            world_position("sand_position", "centre of the sand deposit's floor", axes=(0, 1)),
             ParameterSpec(
                 "sand_yaw",
                 "uniform",
@@ -246,16 +237,7 @@ class SpatialSpadeScene:
                 unit="rad",
                 description="yaw of the deposit (its open side faces its +y)",
             ),
-            ParameterSpec(
-                "goal_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
-                description="centre of the goal box's floor",
-                axes=(0, 1),
-            ),
+            world_position("goal_position", "centre of the goal box's floor", axes=(0, 1)),
         )
         self.batch_size = 0
         # The state of the B instances, built by reset.
