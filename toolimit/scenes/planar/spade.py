@@ -55,8 +55,7 @@ from toolimit.scenes.planar.sand_pile import (
     SandMaterial,
     add_circles,
     add_ground,
-    add_open_box,
-    add_tray,
+    add_walls,
     configure_space,
     settled_pile,
 )
@@ -194,7 +193,7 @@ class PlanarSpadeScene:
             space = pymunk.Space()
             configure_space(space, self.solver_iterations, self.sleeping)
             add_ground(space, self.sand.friction)
-            add_tray(
+            add_walls(
                 space,
                 self.sand_x,
                 self.deposit_half_width,
@@ -202,14 +201,14 @@ class PlanarSpadeScene:
                 WALL_THICKNESS,
                 self.sand.friction,
             )
-            box = add_open_box(
+            box = add_walls(
                 space,
                 self.goal_x,
                 self.goal_half_width,
                 self.goal_wall_height,
                 WALL_THICKNESS,
                 self.sand.friction,
-                self.goal_box_mass,
+                mass=self.goal_box_mass,
             )
             jitter = rng.normal(0.0, self.sand_jitter, pile.shape)
             jitter[:, 1] = np.abs(jitter[:, 1])  # lift rather than push circles into the ground
