@@ -6,6 +6,7 @@ import pytest
 from toolimit.scenes.base import (
     WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SuccessTracker,
     parameter_violation,
     world_position,
@@ -51,3 +52,15 @@ def test_success_tracker_needs_the_goal_on_half_of_the_steps():
     for met in ([True, False], [False, False], [True, True], [False, False]):
         tracker.record(np.array(met))
     assert tracker.is_success().tolist() == [True, False]  # 2 of 4 steps, 1 of 4 steps
+
+
+def test_scene_base_checks_the_timing_and_the_parameters_against_the_specs():
+    with pytest.raises(ValueError, match="control_dt must be a positive number"):
+        SceneBase(control_dt=0.0, substeps=10)
+    with pytest.raises(ValueError, match="substeps must be >= 1"):
+        SceneBase(control_dt=0.04, substeps=0)
+    scene = SceneBase(control_dt=0.04, substeps=10)
+    scene.parameters = SPECS
+    assert (scene.control_dt, scene.substeps, scene.batch_size) == (0.04, 10, 0)
+    assert scene.invalid_reason(GOOD) is None
+    assert scene.invalid_reason({"yaw": 0.0}) == "missing parameter 'box'"

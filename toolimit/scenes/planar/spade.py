@@ -43,10 +43,12 @@ import pymunk.batch
 from toolimit.scenes.base import (
     CONTROL_FPS,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     SuccessTracker,
     check_reset,
     parameter_violation,
+    require_counts,
     require_reset,
     world_position,
 )
@@ -75,11 +77,11 @@ def spade_outline(head_length: float, length: float, lip_height: float) -> np.nd
     return np.array([[0.0, 0.0, 0.0], [0.0, 0.0, head_length], [lip_height, 0.0, head_length], [0.0, 0.0, length]])
 
 
-class PlanarSpadeScene:
+class PlanarSpadeScene(SceneBase):
     """B instances of the planar spade world; see the module docstring for geometry and rewards.
 
     Args:
-        control_dt: duration of one ``step``, s.
+        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
         substeps: physics sub-steps per control step (10 at 24 Hz = 240 Hz).
         sand_count: number of sand circles.
         sand: radius (m), mass (kg), friction, elasticity of the circles.
@@ -116,12 +118,8 @@ class PlanarSpadeScene:
         solver_iterations: int = 10,
         sleeping: bool = True,
     ):
-        if control_dt <= 0 or substeps < 1 or sand_count < 1:
-            raise ValueError(
-                f"need control_dt > 0, substeps >= 1, sand_count >= 1; got {control_dt}, {substeps}, {sand_count}"
-            )
-        self.control_dt = float(control_dt)
-        self.substeps = int(substeps)
+        super().__init__(control_dt, substeps)
+        require_counts(sand_count=sand_count)
         self.sand_count = int(sand_count)
         self.sand = sand
         self.sand_jitter = float(sand_jitter)
@@ -140,7 +138,6 @@ class PlanarSpadeScene:
             world_position("sand_position", "centre of the sand deposit tray on the ground (x used)", axes=(0,)),
             world_position("goal_position", "centre of the open goal box on the ground (x used)", axes=(0,)),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self.sand_x = self.goal_x = 0.0  # deposit and goal box centres at reset, m
         self._spaces: list[pymunk.Space] = []
