@@ -3,7 +3,14 @@
 import numpy as np
 import pytest
 
-from toolimit.scenes.base import WORLD_HALF_SIZE, ParameterSpec, SuccessTracker, parameter_violation
+from toolimit.scenes.base import (
+    WORLD_HALF_SIZE,
+    ParameterSpec,
+    SceneBase,
+    SuccessTracker,
+    parameter_violation,
+    world_position,
+)
 
 SPECS = (
     ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.1), (WORLD_HALF_SIZE,) * 2 + (2.0,),
@@ -26,6 +33,15 @@ def test_parameter_violation_names_the_parameter_the_axis_and_the_bound(change, 
     assert reason is None if message is None else message in reason
 
 
+def test_world_position_spans_the_world_in_x_y_and_stands_on_the_ground_unless_raised():
+    ground = world_position("box", "a box", axes=(0, 1))
+    assert ground == ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                                   (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
+                                   description="a box", axes=(0, 1))
+    raised = world_position("box", "a box", low_z=0.1, high_z=2.0, axes=(0, 2), bound_reason="above the floor")
+    assert not raised.on_ground and raised.low == SPECS[0].low and raised.high == SPECS[0].high
+
+
 def test_parameter_violation_names_a_missing_parameter():
     assert parameter_violation(SPECS, {"yaw": 0.0}) == "missing parameter 'box'"
 
@@ -36,3 +52,15 @@ def test_success_tracker_needs_the_goal_on_half_of_the_steps():
     for met in ([True, False], [False, False], [True, True], [False, False]):
         tracker.record(np.array(met))
     assert tracker.is_success().tolist() == [True, False]  # 2 of 4 steps, 1 of 4 steps
+
+
+def test_scene_base_checks_the_timing_and_the_parameters_against_the_specs():
+    with pytest.raises(ValueError, match="control_dt must be a positive number"):
+        SceneBase(control_dt=0.0, substeps=10)
+    with pytest.raises(ValueError, match="substeps must be >= 1"):
+        SceneBase(control_dt=0.04, substeps=0)
+    scene = SceneBase(control_dt=0.04, substeps=10)
+    scene.parameters = SPECS
+    assert (scene.control_dt, scene.substeps, scene.batch_size) == (0.04, 10, 0)
+    assert scene.invalid_reason(GOOD) is None
+    assert scene.invalid_reason({"yaw": 0.0}) == "missing parameter 'box'"

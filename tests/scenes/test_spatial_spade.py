@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from toolimit.scenes import InvalidSceneParameters, Scene, make_scene
+from toolimit.scenes.base import WORLD_HALF_SIZE
 from toolimit.scenes.spatial.particles import GranularMaterial
 from toolimit.scenes.spatial.scoop import scripted_scoop
 from toolimit.scenes.spatial.spade import (
     DEPOSIT_INNER,
     GOAL_INNER,
     MAX_SPHERES,
-    WORLD_HALF_SIZE,
     SpatialSpadeScene,
 )
 from toolimit.tools import ToolPose

@@ -105,6 +105,26 @@ def check_count(option: str, value: int, minimum: int = 1) -> None:
         raise CliError(f"{option}: must be a {kind} integer, got {value}")
 
 
+def add_tool_argument(parser: argparse.ArgumentParser) -> None:
+    """``--tool`` (required): the tool a command works with."""
+    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+
+
+def add_world_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    """``--world``: the scene's world, ``default`` when not given (checked by :func:`check_scene`)."""
+    parser.add_argument("--world", default=default, help=f"planar or 3d (default: {default})")
+
+
+def add_seed_argument(parser: argparse.ArgumentParser, what: str = "random seed", default: int = 0) -> None:
+    """``--seed``: the integer seed of ``what`` (same seed, same result)."""
+    parser.add_argument("--seed", type=int, default=default, help=f"{what} (default: {default})")
+
+
+def add_out_argument(parser: argparse.ArgumentParser, what: str = "output folder") -> None:
+    """``--out`` (required): where a command writes, ``what`` for the help."""
+    parser.add_argument("--out", required=True, type=Path, help=what)
+
+
 def add_frame_argument(parser: argparse.ArgumentParser) -> None:
     """``--frame``: the orientation convention of a poses file (see :func:`load_poses`)."""
     parser.add_argument(

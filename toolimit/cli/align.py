@@ -17,6 +17,10 @@ from pathlib import Path
 
 from toolimit.cli import (
     CliError,
+    add_out_argument,
+    add_seed_argument,
+    add_tool_argument,
+    add_world_argument,
     check_count,
     check_output_file,
     check_output_folder,
@@ -37,8 +41,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Find scene parameters under which a demonstration reaches the goal (stage ii): "
         "writes OUT/alignment.json and OUT/aligned_demo.npz. Exit code 1 when no candidate is found.",
     )
-    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
-    parser.add_argument("--world", default="planar", help="planar or 3d (default: planar)")
+    add_tool_argument(parser)
+    add_world_argument(parser, "planar")
     parser.add_argument(
         "--demo",
         required=True,
@@ -52,14 +56,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=DEFAULT_CANDIDATES,
         help=f"stop after this many samples with a reward (default: {DEFAULT_CANDIDATES})",
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_seed_argument(parser)
     parser.add_argument(
         "--workers",
         type=int,
         default=None,
         help="worker processes (default: up to 4, one per CPU core); results do not depend on it",
     )
-    parser.add_argument("--out", required=True, type=Path, help="output folder")
+    add_out_argument(parser)
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument(
         "--html",

@@ -6,7 +6,15 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, check_choice, check_count, check_writable_folder
+from toolimit.cli import (
+    CliError,
+    add_out_argument,
+    add_seed_argument,
+    add_tool_argument,
+    check_choice,
+    check_count,
+    check_writable_folder,
+)
 
 if TYPE_CHECKING:
     from toolimit.demos import ToolDemo
@@ -17,10 +25,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     actions = parser.add_subparsers(dest="action", required=True)
 
     synth = actions.add_parser("synth", help="write a synthetic demonstration (.npz)")
-    synth.add_argument("--tool", required=True, help="spade, hammer or scythe")
-    synth.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_tool_argument(synth)
+    add_seed_argument(synth)
     synth.add_argument("--fps", type=float, default=24.0, help="frames per second (default: 24)")
-    synth.add_argument("--out", required=True, type=Path, help="output .npz file")
+    add_out_argument(synth, "output .npz file")
     synth.set_defaults(func=run_synth)
 
     show = actions.add_parser("show", help="print a demonstration's summary and keypoints, as loaded and cleaned")

@@ -12,7 +12,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, check_writable_folder
+from toolimit.cli import CliError, add_seed_argument, check_writable_folder
 
 if TYPE_CHECKING:
     from toolimit.learn.evaluate import Evaluation
@@ -27,7 +27,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--policy", required=True, type=Path, help="`toolimit learn` output folder")
     parser.add_argument("--episodes", type=int, default=20, help="episodes per mode (default: 20)")
-    parser.add_argument("--seed", type=int, default=1000, help="seed of the evaluation episodes (default: 1000)")
+    add_seed_argument(parser, "seed of the evaluation episodes", default=1000)
     parser.add_argument("--out", type=Path, default=None, help="JSON report (default: POLICY/evaluation.json)")
     parser.set_defaults(func=run)
 

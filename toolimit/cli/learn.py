@@ -16,6 +16,8 @@ from pathlib import Path
 
 from toolimit.cli import (
     CliError,
+    add_out_argument,
+    add_seed_argument,
     check_output_file,
     check_output_folder,
 )
@@ -71,7 +73,7 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | Non
         "learned one with --no-clone (default: 0.2, the authors')",
     )
     parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_seed_argument(parser)
 
 
 def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
@@ -119,7 +121,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     source.add_argument("--env", help="a registered id, e.g. toolimit/SpadePlanar-v0 (its shipped task)")
     parser.add_argument("--trajectory", type=Path, help="`toolimit trajopt` output folder (with --alignment)")
     parser.add_argument("--robot", default=None, help="with --env: another robot's shipped task")
-    parser.add_argument("--out", required=True, type=Path, help="output folder")
+    add_out_argument(parser)
     add_learning_arguments(parser, timesteps=200_000)
     parser.add_argument("--rerun", type=Path, default=None, help="also save the learning curves as a rerun .rrd")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")

@@ -22,7 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
-from toolimit.cli import CliError, add_frame_argument, check_count, check_scene, load_poses
+from toolimit.cli import (
+    CliError,
+    add_frame_argument,
+    add_seed_argument,
+    add_tool_argument,
+    add_world_argument,
+    check_count,
+    check_scene,
+    load_poses,
+)
 
 #: The original authors' aligned files' parameter names and the scenes' names for them.
 ORIGINAL_PARAMETER_NAMES = {
@@ -40,8 +49,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Replay a tool motion (poses file) tool-only in a scene with given parameters, "
         "several times, and report the goal reward each replay earned.",
     )
-    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
-    parser.add_argument("--world", default="3d", help="planar or 3d (default: 3d)")
+    add_tool_argument(parser)
+    add_world_argument(parser, "3d")
     parser.add_argument("--poses", required=True, type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
     add_frame_argument(parser)
     source = parser.add_mutually_exclusive_group(required=True)
@@ -54,7 +63,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         + ")",
     )
     parser.add_argument("--replays", type=int, default=10, help="replays, one batch (default: 10)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_seed_argument(parser)
     parser.add_argument("--html", type=Path, default=None, help="3d world only: save the first replay as .html")
     parser.add_argument("--json", type=Path, default=None, help="save the figures as .json")
     parser.set_defaults(func=run)

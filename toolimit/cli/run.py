@@ -22,7 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, check_output_folder
+from toolimit.cli import CliError, add_out_argument, add_tool_argument, add_world_argument, check_output_folder
 from toolimit.cli.learn import add_learning_arguments, learning_config
 from toolimit.cli.trajopt import parse_time_scales
 
@@ -61,11 +61,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "run", help="the whole pipeline: align, trajopt, learn, evaluate", description=__doc__.splitlines()[0]
     )
-    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+    add_tool_argument(parser)
     parser.add_argument("--robot", required=True, help="robot model (panda, ur5, talos, planar3)")
     parser.add_argument("--demo", required=True, type=Path, help="demonstration file")
-    parser.add_argument("--world", default="3d", help="3d or planar (default: 3d)")
-    parser.add_argument("--out", required=True, type=Path, help="output folder (one sub-folder per stage)")
+    add_world_argument(parser, "3d")
+    add_out_argument(parser, "output folder (one sub-folder per stage)")
     parser.add_argument("--samples", type=int, default=20_000, help="alignment sample budget (default: 20000)")
     parser.add_argument(
         "--candidates",

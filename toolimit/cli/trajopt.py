@@ -15,6 +15,9 @@ from pathlib import Path
 from toolimit.cli import (
     CliError,
     add_frame_argument,
+    add_out_argument,
+    add_seed_argument,
+    add_tool_argument,
     check_choice,
     check_count,
     check_output_file,
@@ -32,12 +35,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--robot", required=True, help=f"robot model ({', '.join(ROBOTS)})")
-    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+    add_tool_argument(parser)
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--alignment", type=Path, help="alignment output folder (reads aligned_demo.npz)")
     source.add_argument("--poses", type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
     add_frame_argument(parser)
-    parser.add_argument("--out", required=True, type=Path, help="output folder")
+    add_out_argument(parser)
     parser.add_argument(
         "--time-scale",
         default="1",
@@ -46,7 +49,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "one whose robot replay earns the most",
     )
     parser.add_argument("--starts", type=int, default=8, help="base initialisations (default: 8)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the random starts beyond 8 (default: 0)")
+    add_seed_argument(parser, "seed of the random starts beyond 8")
     parser.add_argument(
         "--init",
         choices=("hold", "rollout", "both"),

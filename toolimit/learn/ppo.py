@@ -60,6 +60,13 @@ class PpoSettings:
     episodes_per_update: int = 2
     target_kl: float | None = None
 
+    def sb3_kwargs(self) -> dict[str, Any]:
+        """The settings SB3's ``PPO`` takes under their own names: all but the rollout shape
+        (``minibatches``, ``episodes_per_update``), which give its ``n_steps`` and ``batch_size``."""
+        kwargs = asdict(self)
+        del kwargs["minibatches"], kwargs["episodes_per_update"]
+        return kwargs
+
 
 #: ``authors``: AUTHORS_SETUP.md, the default. ``toolimit``: the same with the gradient norm
 #: clipped at 0.5 instead of 0.001 and one episode per update. Measured on the shipped planar spade
@@ -89,18 +96,9 @@ def make_ppo(
     model = PPO(
         "MlpPolicy",
         env,
-        learning_rate=settings.learning_rate,
         n_steps=n_steps,
         batch_size=max(1, n_steps * env.num_envs // settings.minibatches),
-        n_epochs=settings.n_epochs,
-        gamma=settings.gamma,
-        gae_lambda=settings.gae_lambda,
-        clip_range=settings.clip_range,
-        normalize_advantage=settings.normalize_advantage,
-        ent_coef=settings.ent_coef,
-        vf_coef=settings.vf_coef,
-        max_grad_norm=settings.max_grad_norm,
-        target_kl=settings.target_kl,
+        **settings.sb3_kwargs(),
         seed=seed,
         device="cpu",
         verbose=0,

@@ -67,6 +67,30 @@ class ParameterSpec:
     bound_reason: str = ""
 
 
+def world_position(
+    name: str,
+    description: str,
+    low_z: float = 0.0,
+    high_z: float = 0.0,
+    axes: tuple[int, ...] = (0, 1, 2),
+    bound_reason: str = "",
+) -> ParameterSpec:
+    """A ``"position"`` spec (unit m) whose x and y may be anywhere in the world (within
+    +-``WORLD_HALF_SIZE``) and whose z lies in [``low_z``, ``high_z``]; the default z = 0 is an
+    element standing on the ground (alignment then sets z = 0)."""
+    return ParameterSpec(
+        name,
+        "position",
+        low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, low_z),
+        high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, high_z),
+        on_ground=low_z == high_z == 0.0,
+        unit="m",
+        description=description,
+        axes=axes,
+        bound_reason=bound_reason,
+    )
+
+
 @runtime_checkable
 class Scene(Protocol):
     """What every scene offers. See the module docstring for frames and batching.
@@ -125,6 +149,34 @@ class Scene(Protocol):
 
 
 # --- helpers for scene implementations -----------------------------------------------------------
+class SceneBase:
+    """The set-up every scene's constructor shares: its timing (checked), no instances before the
+    first ``reset``, and the parameter check driven by the scene's specs.
+
+    Subclasses set ``tool``, ``world`` and ``parameters`` (see :class:`Scene`) and override
+    :meth:`invalid_reason` only to add checks the specs cannot express (an overlap).
+
+    Args:
+        control_dt: duration of one ``step``, s.
+        substeps: physics (or cut-test) sub-steps per control step.
+    """
+
+    tool: str
+    world: str
+    parameters: tuple[ParameterSpec, ...]
+
+    def __init__(self, control_dt: float, substeps: int) -> None:
+        require_positive(control_dt=control_dt)
+        require_counts(substeps=substeps)
+        self.control_dt = float(control_dt)
+        self.substeps = int(substeps)
+        self.batch_size = 0  # B, set by reset
+
+    def invalid_reason(self, params: SceneParams) -> str | None:
+        """Why ``params`` cannot make this scene (against its parameter specs), or None."""
+        return parameter_violation(self.parameters, params)
+
+
 def parameter_violation(parameters: tuple[ParameterSpec, ...], params: SceneParams) -> str | None:
     """Why ``params`` do not meet the specs, or None: a missing name, a position that is not a finite
     (3,) world point or lies outside [low, high] on one of its ``axes``, a uniform value that is not a

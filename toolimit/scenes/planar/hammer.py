@@ -37,12 +37,12 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     check_reset,
-    parameter_violation,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool, plane_point
 from toolimit.tools import ToolPose, tool_spec
@@ -55,11 +55,11 @@ BOARD_HALF_LENGTH = 0.15
 SHANK_EMBEDDED = 0.02
 
 
-class PlanarHammerScene:
+class PlanarHammerScene(SceneBase):
     """B instances of the planar hammer world; see the module docstring for geometry and rewards.
 
     Args:
-        control_dt: duration of one ``step``, s.
+        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
         substeps: physics sub-steps per control step (20 at 24 Hz = 480 Hz).
         protrusion: nail travel from its start to fully planted, m (0 < protrusion <= 0.1).
         nail_mass: kg. friction_force: maximum entry friction force, N.
@@ -87,12 +87,9 @@ class PlanarHammerScene:
         planted_tolerance: float = 0.001,
         success_window: float = 1.0,
     ):
-        if control_dt <= 0 or substeps < 1:
-            raise ValueError(f"need control_dt > 0 and substeps >= 1; got {control_dt}, {substeps}")
+        super().__init__(control_dt, substeps)
         if not 0.0 < protrusion <= 0.1:
             raise ValueError(f"protrusion must be in (0, 0.1] m, got {protrusion}")
-        self.control_dt = float(control_dt)
-        self.substeps = int(substeps)
         self.protrusion = float(protrusion)
         self.nail_mass = float(nail_mass)
         self.friction_force = float(friction_force)
@@ -108,20 +105,16 @@ class PlanarHammerScene:
         self._head_corners = corners  # (8, 3) tool frame, m
         self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "nail_position",
-                "position",
-                (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, self.protrusion),
-                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, MAX_NAIL_HEIGHT),
-                on_ground=False,
-                unit="m",
-                description=f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
+                f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
+                low_z=self.protrusion,
+                high_z=MAX_NAIL_HEIGHT,
                 axes=(0, 2),
                 bound_reason="the board surface, one protrusion below the nail's top, may not be "
                 "below the ground (z = 0)",
             ),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self.nail_start = np.zeros(2)  # plane point (x, z) of the nail head's top at reset, m
         self._spaces: list[pymunk.Space] = []
@@ -132,10 +125,6 @@ class PlanarHammerScene:
         self._planted_at = np.zeros(0)
 
     # ----------------------------------------------------------------------------------- parameters
-    def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make a scene: against the specs (|x| > 5 m, board below the ground)."""
-        return parameter_violation(self.parameters, params)
-
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` identical instances (this scene has no per-instance randomness)."""

@@ -42,43 +42,33 @@ def configure_space(space: pymunk.Space, iterations: int, sleeping: bool = True)
     space.idle_speed_threshold = 0.01
 
 
-def add_tray(
+def add_walls(
     space: pymunk.Space,
     centre_x: float,
     inner_half_width: float,
     wall_height: float,
     wall_thickness: float,
     friction: float,
-) -> None:
-    """Two static walls standing on the ground at ``centre_x +- (inner_half_width + t/2)``, metres."""
-    for side in (-1.0, 1.0):
-        x = centre_x + side * (inner_half_width + wall_thickness / 2.0)
-        wall = pymunk.Segment(space.static_body, (x, 0.0), (x, wall_height), wall_thickness / 2.0)
-        wall.friction = friction
-        space.add(wall)
-
-
-def add_open_box(
-    space: pymunk.Space,
-    centre_x: float,
-    inner_half_width: float,
-    wall_height: float,
-    wall_thickness: float,
-    friction: float,
-    mass: float,
+    mass: float | None = None,
 ) -> pymunk.Body:
-    """A dynamic open box (two walls, no floor, no rotation) of ``mass`` kg standing on the ground.
+    """Two walls standing on the ground at ``centre_x +- (inner_half_width + t/2)``, metres; returns their body.
 
-    Body origin at the box centre on the ground; the walls are at ``+-(inner_half_width + t/2)``.
-    A kinematic tool cannot pass through it: it pushes the box (sliding on the ground) instead.
+    Without ``mass``, a static tray (walls of the space's static body). With it, a dynamic open box
+    of ``mass`` kg (two walls, no floor, no rotation) whose body origin is the box centre on the
+    ground and whose rounded walls rest on the ground: a kinematic tool cannot pass through it, it
+    pushes the box (sliding on the ground) instead.
     """
-    body = pymunk.Body(mass, float("inf"))
-    body.position = (centre_x, 0.0)
     radius = wall_thickness / 2.0
-    space.add(body)
+    if mass is None:
+        body, origin_x, bottom = space.static_body, centre_x, 0.0
+    else:
+        body = pymunk.Body(mass, float("inf"))
+        body.position = (centre_x, 0.0)
+        space.add(body)
+        origin_x, bottom = 0.0, radius
     for side in (-1.0, 1.0):
-        x = side * (inner_half_width + radius)
-        wall = pymunk.Segment(body, (x, radius), (x, wall_height), radius)
+        x = origin_x + side * (inner_half_width + radius)
+        wall = pymunk.Segment(body, (x, bottom), (x, wall_height), radius)
         wall.friction = friction
         space.add(wall)
     return body
@@ -142,7 +132,7 @@ def settled_pile(
     space = pymunk.Space()
     configure_space(space, iterations)
     add_ground(space, material.friction)
-    add_tray(space, 0.0, inner_half_width, wall_height, wall_thickness, material.friction)
+    add_walls(space, 0.0, inner_half_width, wall_height, wall_thickness, material.friction)
     bodies = add_circles(space, start, material)
     settle(space, bodies, max_time=5.0, dt=dt)
     return np.array([tuple(body.position) for body in bodies])

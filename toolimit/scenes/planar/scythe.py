@@ -31,22 +31,24 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     check_reset,
-    parameter_violation,
+    require_counts,
+    require_positive,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
 
 
-class PlanarScytheScene:
+class PlanarScytheScene(SceneBase):
     """B instances of the planar scythe world; see the module docstring for the cut test.
 
     Args:
-        control_dt: duration of one ``step``, s.
+        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
         substeps: cut-test sub-intervals per control step (10 at 24 Hz = 240 Hz).
         stalk_count: stalks in the patch. patch_diameter: m. stalk_radius: m.
         max_cut_height: highest blade height (m) that cuts. min_cut_speed: slowest cut, m/s.
@@ -67,13 +69,9 @@ class PlanarScytheScene:
         min_cut_speed: float = 1.0,
         success_window: float = 1.0,
     ):
-        if control_dt <= 0 or substeps < 1 or stalk_count < 1 or patch_diameter <= 0:
-            raise ValueError(
-                "need control_dt > 0, substeps >= 1, stalk_count >= 1, patch_diameter > 0; got "
-                f"{control_dt}, {substeps}, {stalk_count}, {patch_diameter}"
-            )
-        self.control_dt = float(control_dt)
-        self.substeps = int(substeps)
+        super().__init__(control_dt, substeps)
+        require_counts(stalk_count=stalk_count)
+        require_positive(patch_diameter=patch_diameter)
         self.stalk_count = int(stalk_count)
         self.patch_diameter = float(patch_diameter)
         self.stalk_radius = float(stalk_radius)
@@ -82,18 +80,12 @@ class PlanarScytheScene:
         self.success_window = float(success_window)
         self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "grass_position",
-                "position",
-                (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
+                f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
                 axes=(0, 1),
-                description=f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
             ),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self.grass_centre = np.zeros(2)  # patch centre, world x-y, m
         self.stalks = np.zeros((0, self.stalk_count, 2))  # (B, M, 2) stalk positions, m
@@ -104,10 +96,6 @@ class PlanarScytheScene:
         self._all_cut_at = np.zeros(0)
 
     # ----------------------------------------------------------------------------------- parameters
-    def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make a scene: against the specs (|x|, |y| > 5 m)."""
-        return parameter_violation(self.parameters, params)
-
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` instances, each with its own stalk placement drawn from ``rng``."""

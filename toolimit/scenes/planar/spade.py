@@ -42,21 +42,22 @@ import pymunk.batch
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     SuccessTracker,
     check_reset,
     parameter_violation,
+    require_counts,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool, plane_point
 from toolimit.scenes.planar.sand_pile import (
     SandMaterial,
     add_circles,
     add_ground,
-    add_open_box,
-    add_tray,
+    add_walls,
     configure_space,
     settled_pile,
 )
@@ -76,11 +77,11 @@ def spade_outline(head_length: float, length: float, lip_height: float) -> np.nd
     return np.array([[0.0, 0.0, 0.0], [0.0, 0.0, head_length], [lip_height, 0.0, head_length], [0.0, 0.0, length]])
 
 
-class PlanarSpadeScene:
+class PlanarSpadeScene(SceneBase):
     """B instances of the planar spade world; see the module docstring for geometry and rewards.
 
     Args:
-        control_dt: duration of one ``step``, s.
+        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
         substeps: physics sub-steps per control step (10 at 24 Hz = 240 Hz).
         sand_count: number of sand circles.
         sand: radius (m), mass (kg), friction, elasticity of the circles.
@@ -117,12 +118,8 @@ class PlanarSpadeScene:
         solver_iterations: int = 10,
         sleeping: bool = True,
     ):
-        if control_dt <= 0 or substeps < 1 or sand_count < 1:
-            raise ValueError(
-                f"need control_dt > 0, substeps >= 1, sand_count >= 1; got {control_dt}, {substeps}, {sand_count}"
-            )
-        self.control_dt = float(control_dt)
-        self.substeps = int(substeps)
+        super().__init__(control_dt, substeps)
+        require_counts(sand_count=sand_count)
         self.sand_count = int(sand_count)
         self.sand = sand
         self.sand_jitter = float(sand_jitter)
@@ -137,30 +134,10 @@ class PlanarSpadeScene:
         self.sleeping = bool(sleeping)
         spec = tool_spec("spade")
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
-        low, high = (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0), (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0)
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
-                "sand_position",
-                "position",
-                low,
-                high,
-                on_ground=True,
-                unit="m",
-                description="centre of the sand deposit tray on the ground (x used)",
-                axes=(0,),
-            ),
-            ParameterSpec(
-                "goal_position",
-                "position",
-                low,
-                high,
-                on_ground=True,
-                unit="m",
-                description="centre of the open goal box on the ground (x used)",
-                axes=(0,),
-            ),
+            world_position("sand_position", "centre of the sand deposit tray on the ground (x used)", axes=(0,)),
+            world_position("goal_position", "centre of the open goal box on the ground (x used)", axes=(0,)),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self.sand_x = self.goal_x = 0.0  # deposit and goal box centres at reset, m
         self._spaces: list[pymunk.Space] = []
@@ -213,7 +190,7 @@ class PlanarSpadeScene:
             space = pymunk.Space()
             configure_space(space, self.solver_iterations, self.sleeping)
             add_ground(space, self.sand.friction)
-            add_tray(
+            add_walls(
                 space,
                 self.sand_x,
                 self.deposit_half_width,
@@ -221,14 +198,14 @@ class PlanarSpadeScene:
                 WALL_THICKNESS,
                 self.sand.friction,
             )
-            box = add_open_box(
+            box = add_walls(
                 space,
                 self.goal_x,
                 self.goal_half_width,
                 self.goal_wall_height,
                 WALL_THICKNESS,
                 self.sand.friction,
-                self.goal_box_mass,
+                mass=self.goal_box_mass,
             )
             jitter = rng.normal(0.0, self.sand_jitter, pile.shape)
             jitter[:, 1] = np.abs(jitter[:, 1])  # lift rather than push circles into the ground

@@ -26,15 +26,14 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     batched_pose,
     check_reset,
-    parameter_violation,
-    require_counts,
     require_positive,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import interpolate_poses, tool_snapshot
@@ -62,7 +61,7 @@ def box_surface_points(half_extents: np.ndarray, per_edge: int = 5) -> np.ndarra
     return unit * np.asarray(half_extents, dtype=float)
 
 
-class SpatialHammerScene:
+class SpatialHammerScene(SceneBase):
     """Batched 3D nail-hammering scene (see the module docstring for the physics).
 
     Args:
@@ -78,8 +77,7 @@ class SpatialHammerScene:
         success_window: the nail must be planted within this many seconds of the tool's placement
             (the first ``step``, time 0) for success (the paper: "within the first second"); as in
             the planar worlds.
-        substeps: physics sub-steps per control step.
-        control_dt: duration of one ``step``, s.
+        substeps, control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
     """
 
     tool = "hammer"
@@ -101,6 +99,7 @@ class SpatialHammerScene:
         substeps: int = 10,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
+        super().__init__(control_dt, substeps)
         require_positive(
             protrusion=protrusion,
             guide_travel=guide_travel,
@@ -112,13 +111,11 @@ class SpatialHammerScene:
             entry_deceleration=entry_deceleration,
             planted_tolerance=planted_tolerance,
             success_window=success_window,
-            control_dt=control_dt,
         )
         if protrusion > guide_travel:
             raise ValueError(f"protrusion ({protrusion} m) exceeds the guide travel ({guide_travel} m)")
         if not 0.0 <= restitution <= 1.0:
             raise ValueError(f"restitution must be in [0, 1], got {restitution!r}")
-        require_counts(substeps=substeps)
         self.protrusion = float(protrusion)
         self.guide_travel = float(guide_travel)
         self.plate_half_size = float(plate_half_size)
@@ -130,26 +127,19 @@ class SpatialHammerScene:
         self.restitution = float(restitution)
         self.planted_tolerance = float(planted_tolerance)
         self.success_window = float(success_window)
-        self.substeps = int(substeps)
-        self.control_dt = float(control_dt)
         head = tool_boxes("hammer")[0]
         #: (P, 3) points on the hammer head box's surface (tool_geometry's head box), tool frame, m.
         self.head_points = head.center + box_surface_points(head.half_extents) @ head.rotation.T
         lowest_head_top = self.plate_thickness + self.protrusion
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "nail_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, lowest_head_top),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 1.5),
-                on_ground=False,
-                unit="m",
-                description="initial top of the nail head (the board's top is "
-                f"{lowest_head_top * 1000:.0f} mm below it)",
+                f"initial top of the nail head (the board's top is {lowest_head_top * 1000:.0f} mm below it)",
+                low_z=lowest_head_top,
+                high_z=1.5,
                 bound_reason="the board under the nail must stand on the ground",
             ),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self._nail_xy = np.zeros(2)
         self._start_top = 0.0
@@ -161,10 +151,6 @@ class SpatialHammerScene:
         self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
 
     # ----------------------------------------------------------------------------- parameters
-    def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make this scene (against the specs), or None."""
-        return parameter_violation(self.parameters, params)
-
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build B nails at ``params["nail_position"]``; the hammer is absent until ``step``.
 

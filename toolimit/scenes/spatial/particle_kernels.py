@@ -93,6 +93,25 @@ def _box_contact(s, e, half, radius, mu_s, mu_k, out):  # type: ignore[no-untype
 
 
 @_inline
+def _in_tool_frame(b, i, previous, predicted, p0, r0, p1, r1, low, high, start, end):  # type: ignore[no-untyped-def]
+    """Sphere i of instance b in the tool frame: ``previous`` with the tool at p0, r0 (the sub-step's
+    start) into ``start`` (3,), ``predicted`` with the tool at p1, r1 (its end) into ``end`` (3,).
+    Returns whether that segment is clear of the tool's grown bounds ``low``, ``high`` (3,), i.e.
+    entirely beyond them along some axis (the tool's broad phase)."""
+    clear = False
+    for a in range(3):
+        sa = 0.0
+        ea = 0.0
+        for c in range(3):
+            sa += (previous[b, i, c] - p0[b, c]) * r0[b, c, a]
+            ea += (predicted[b, i, c] - p1[b, c]) * r1[b, c, a]
+        start[a], end[a] = sa, ea
+        if min(sa, ea) >= high[a] or max(sa, ea) <= low[a]:
+            clear = True
+    return clear
+
+
+@_inline
 def _boxes_correction(start, end, centers, rotations, halves, bounds, radius, mu_s, mu_k, moved, scratch):  # type: ignore[no-untyped-def]
     """Correction ``moved`` (3,) of a sphere (start, end (3,) in the boxes' common frame) against
     oriented boxes (K, ...): pushes summed (faces meeting at an edge are orthogonal), friction
@@ -183,36 +202,23 @@ def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: i
 
 
 @_jit
-def _project(
-    b,
-    previous,
-    predicted,
-    pairs,
-    n_pairs,
-    has_tool,
-    p0,
-    r0,
-    p1,
-    r1,
-    box_centers,
-    box_rotations,
-    box_halves,
-    box_bounds,
-    capsule_starts,
-    capsule_ends,
-    capsule_radii,
-    tool_low,
-    tool_high,
-    wall_centers,
-    wall_rotations,
-    wall_halves,
-    wall_bounds,
-    coefficients,
-):  # type: ignore[no-untyped-def]
+def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients):  # type: ignore[no-untyped-def]
     """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
     ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
     at its end), then the walls and the ground again without friction, so that static surfaces
-    win. Updates ``predicted[b]`` in place."""
+    win. ``tool``: the tool's shape arrays (see :func:`advance`); ``walls``: the walls' centers,
+    rotations, half extents and bounds. Updates ``predicted[b]`` in place."""
+    (
+        box_centers,
+        box_rotations,
+        box_halves,
+        box_bounds,
+        capsule_starts,
+        capsule_ends,
+        capsule_radii,
+        tool_low,
+        tool_high,
+    ) = tool
     n = predicted.shape[1]
     radius = coefficients[RADIUS]
     if n_pairs[b]:
@@ -241,10 +247,7 @@ def _project(
         b,
         previous,
         predicted,
-        wall_centers,
-        wall_rotations,
-        wall_halves,
-        wall_bounds,
+        walls,
         radius,
         coefficients[MU_WALL_S],
         coefficients[MU_WALL_K],
@@ -256,17 +259,7 @@ def _project(
     if has_tool:
         mu_s, mu_k = coefficients[MU_TOOL_S], coefficients[MU_TOOL_K]
         for i in range(n):
-            outside = False
-            for a in range(3):
-                sa = 0.0
-                ea = 0.0
-                for c in range(3):
-                    sa += (previous[b, i, c] - p0[b, c]) * r0[b, c, a]
-                    ea += (predicted[b, i, c] - p1[b, c]) * r1[b, c, a]
-                start[a], end[a] = sa, ea
-                if min(sa, ea) >= tool_high[a] or max(sa, ea) <= tool_low[a]:
-                    outside = True
-            if outside:
+            if _in_tool_frame(b, i, previous, predicted, p0, r0, p1, r1, tool_low, tool_high, start, end):
                 continue
             _boxes_correction(
                 start, end, box_centers, box_rotations, box_halves, box_bounds, radius, mu_s, mu_k, moved, scratch
@@ -318,44 +311,15 @@ def _project(
                 predicted[b, i, c] += r1[b, c, 0] * moved[0] + r1[b, c, 1] * moved[1] + r1[b, c, 2] * moved[2]
 
     # ... and their normal constraints after it: the walls, then the ground's hard limit, win.
-    _walls_pass(
-        b,
-        previous,
-        predicted,
-        wall_centers,
-        wall_rotations,
-        wall_halves,
-        wall_bounds,
-        radius,
-        0.0,
-        0.0,
-        start,
-        end,
-        moved,
-        scratch,
-    )
+    _walls_pass(b, previous, predicted, walls, radius, 0.0, 0.0, start, end, moved, scratch)
     for i in range(n):
         predicted[b, i, 2] = max(predicted[b, i, 2], radius)
 
 
 @_inline
-def _walls_pass(
-    b,
-    previous,
-    predicted,
-    wall_centers,
-    wall_rotations,
-    wall_halves,
-    wall_bounds,
-    radius,
-    mu_s,
-    mu_k,
-    start,
-    end,
-    moved,
-    scratch,
-):  # type: ignore[no-untyped-def]
+def _walls_pass(b, previous, predicted, walls, radius, mu_s, mu_k, start, end, moved, scratch):  # type: ignore[no-untyped-def]
     """Contacts of instance b's spheres with the walls (friction mu_s, mu_k), in place."""
+    wall_centers, wall_rotations, wall_halves, wall_bounds = walls
     if wall_centers.shape[0] == 0:
         return
     for i in range(predicted.shape[1]):
@@ -424,18 +388,9 @@ def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ig
 @_jit
 def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
     """Whether a sphere of instance b meets the tool's grown bounds during the sub-step."""
+    start, end = np.empty(3), np.empty(3)
     for i in range(positions.shape[1]):
-        inside = True
-        for a in range(3):
-            sa = 0.0
-            ea = 0.0
-            for c in range(3):
-                sa += (positions[b, i, c] - p0[b, c]) * r0[b, c, a]
-                ea += (positions[b, i, c] - p1[b, c]) * r1[b, c, a]
-            if min(sa, ea) >= tool_high[a] or max(sa, ea) <= tool_low[a]:
-                inside = False
-                break
-        if inside:
+        if not _in_tool_frame(b, i, positions, positions, p0, r0, p1, r1, tool_low, tool_high, start, end):
             return True
     return False
 
@@ -454,26 +409,20 @@ def advance(
     has_tool,
     path_positions,
     path_rotations,
-    box_centers,
-    box_rotations,
-    box_halves,
-    box_bounds,
-    capsule_starts,
-    capsule_ends,
-    capsule_radii,
-    tool_low,
-    tool_high,
-    wall_centers,
-    wall_rotations,
-    wall_halves,
-    wall_bounds,
+    tool,
+    walls,
     coefficients,
     freeze_after,
 ):  # type: ignore[no-untyped-def]
     """Sub-steps ``first_substep`` .. S-1 of length h (s) for all instances, the tool moving along
     ``path_positions`` (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3). Updates the state arrays in
     place. Returns -1 when done, or the sub-step at which ``pairs`` proved too small (nothing of
-    that sub-step was simulated yet: grow ``pairs`` and call again from there)."""
+    that sub-step was simulated yet: grow ``pairs`` and call again from there).
+
+    ``tool`` is the tuple (box centers, rotations, half extents, bounds, capsule starts, ends,
+    radii, low, high) of the tool's shapes in its frame with its bounds grown by the sphere radius,
+    ``walls`` the tuple (centers, rotations, half extents, bounds) of the static boxes (world frame).
+    """
     n_batch, n = positions.shape[0], positions.shape[1]
     sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2
     max_speed, gravity = coefficients[MAX_SPEED], coefficients[GRAVITY]
@@ -486,39 +435,14 @@ def advance(
             if (
                 freeze_after > 0
                 and resting[b] >= freeze_after
-                and (not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high))
+                and (not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool[7], tool[8]))
             ):
                 continue  # island sleeping: this instance is at rest and untouched
             for i in range(n):
                 carried[b, i, 2] -= gravity * h
                 for a in range(3):
                     predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
-            _project(
-                b,
-                positions,
-                predicted,
-                pairs,
-                n_pairs,
-                has_tool,
-                p0,
-                r0,
-                p1,
-                r1,
-                box_centers,
-                box_rotations,
-                box_halves,
-                box_bounds,
-                capsule_starts,
-                capsule_ends,
-                capsule_radii,
-                tool_low,
-                tool_high,
-                wall_centers,
-                wall_rotations,
-                wall_halves,
-                wall_bounds,
-                coefficients,
-            )
+            _project(b, positions, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients)
             awake_any = False
             for i in range(n):
                 dx = predicted[b, i, 0] - positions[b, i, 0]
@@ -551,23 +475,13 @@ def place(
     iterations,
     tool_position,
     tool_rotation,
-    box_centers,
-    box_rotations,
-    box_halves,
-    box_bounds,
-    capsule_starts,
-    capsule_ends,
-    capsule_radii,
-    tool_low,
-    tool_high,
-    wall_centers,
-    wall_rotations,
-    wall_halves,
-    wall_bounds,
+    tool,
+    walls,
     coefficients,
 ):  # type: ignore[no-untyped-def]
     """``iterations`` position-only passes over all contacts with the tool still at its pose
-    (B, 3), (B, 3, 3). Returns False if ``pairs`` proved too small (grow it and call again)."""
+    (B, 3), (B, 3, 3); ``tool`` and ``walls`` as in :func:`advance`. Returns False if ``pairs``
+    proved too small (grow it and call again)."""
     predicted = positions.copy()
     for _ in range(iterations):
         if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
@@ -584,19 +498,8 @@ def place(
                 tool_rotation,
                 tool_position,
                 tool_rotation,
-                box_centers,
-                box_rotations,
-                box_halves,
-                box_bounds,
-                capsule_starts,
-                capsule_ends,
-                capsule_radii,
-                tool_low,
-                tool_high,
-                wall_centers,
-                wall_rotations,
-                wall_halves,
-                wall_bounds,
+                tool,
+                walls,
                 coefficients,
             )
         positions[...] = predicted

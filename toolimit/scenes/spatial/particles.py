@@ -331,8 +331,8 @@ class ParticleWorld:
             int(iterations),
             self.tool_position,
             self.tool_rotation,
-            *self._tool_arrays,
-            *self._walls,
+            self._tool_arrays,
+            self._walls,
             self._coefficients,
         ):
             self._grow_pairs()
@@ -383,8 +383,8 @@ class ParticleWorld:
                 has_tool,
                 path_positions,
                 path_rotations,
-                *self._tool_arrays,
-                *self._walls,
+                self._tool_arrays,
+                self._walls,
                 self._coefficients,
                 self._freeze_after,
             )

@@ -23,15 +23,15 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     batched_pose,
     check_reset,
-    parameter_violation,
     require_counts,
     require_positive,
     require_reset,
+    world_position,
 )
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
@@ -88,7 +88,7 @@ def edge_crossings(
     return fraction, along, height
 
 
-class SpatialScytheScene:
+class SpatialScytheScene(SceneBase):
     """Batched 3D grass-mowing scene (see the module docstring for the cutting model).
 
     Args:
@@ -101,8 +101,7 @@ class SpatialScytheScene:
         success_window: every stalk must be cut within this many seconds of the tool's placement
             (the first ``step``, time 0) for success (the paper: "within the first second"); as in
             the planar worlds.
-        substeps: physics sub-steps per control step.
-        control_dt: duration of one ``step``, s.
+        substeps, control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
     """
 
     tool = "scythe"
@@ -120,6 +119,7 @@ class SpatialScytheScene:
         substeps: int = 10,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
+        super().__init__(control_dt, substeps)
         require_positive(
             patch_length=patch_size[0],
             patch_width=patch_size[1],
@@ -128,9 +128,8 @@ class SpatialScytheScene:
             max_cut_height=max_cut_height,
             min_cut_speed=min_cut_speed,
             success_window=success_window,
-            control_dt=control_dt,
         )
-        require_counts(n_stalks=n_stalks, substeps=substeps)
+        require_counts(n_stalks=n_stalks)
         self.n_stalks = int(n_stalks)
         self.patch_size = (float(patch_size[0]), float(patch_size[1]))
         self.stalk_width = float(stalk_width)
@@ -138,29 +137,21 @@ class SpatialScytheScene:
         self.max_cut_height = float(max_cut_height)
         self.min_cut_speed = float(min_cut_speed)
         self.success_window = float(success_window)
-        self.substeps = int(substeps)
-        self.control_dt = float(control_dt)
         blade = tool_boxes("scythe")[0]
         extent = np.abs(blade.rotation[0]) @ blade.half_extents  # half extent along tool x, m
         #: (2, 3) edge root and tip in the tool frame, m.
         self.edge = np.array([[blade.center[0] - extent, 0.0, 0.0], [blade.center[0] + extent, 0.0, 0.0]])
         self.blade_length = 2.0 * extent
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
+            world_position(
                 "grass_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
-                description="centre of the grass patch on the ground",
+                "centre of the grass patch on the ground",
                 bound_reason="the patch lies on the ground, z = 0",
             ),
             ParameterSpec(
                 "grass_yaw", "uniform", low=-np.pi, high=np.pi, unit="rad", description="patch orientation about z"
             ),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self.grass_position = np.zeros(3)  # patch centre, world, m
         self.grass_yaw = 0.0  # rad
@@ -172,10 +163,6 @@ class SpatialScytheScene:
         self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
 
     # ----------------------------------------------------------------------------- parameters
-    def invalid_reason(self, params: SceneParams) -> str | None:
-        """Why ``params`` cannot make this scene (against the specs: x, y within the world, on the ground), or None."""
-        return parameter_violation(self.parameters, params)
-
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Scatter B patches of stalks (each from ``rng``); the scythe is absent until ``step``."""
         batch_size = check_reset(self, params, batch_size)

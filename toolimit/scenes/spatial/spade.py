@@ -66,15 +66,14 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    WORLD_HALF_SIZE,
     ParameterSpec,
+    SceneBase,
     SceneParams,
     SuccessTracker,
     batched_pose,
     check_reset,
     parameter_violation,
-    require_counts,
-    require_positive,
+    world_position,
 )
 from toolimit.scenes.spatial.particles import (
     GranularMaterial,
@@ -198,14 +197,14 @@ def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
     return True
 
 
-class SpatialSpadeScene:
+class SpatialSpadeScene(SceneBase):
     """Batched 3D spade scene (see the module docstring).
 
     Args:
         n_spheres: number of sand spheres, 1..MAX_SPHERES (400).
         substeps: physics sub-steps per control step (10 -> 240 Hz).
         material: sphere constants (radius, friction, ...); default the original scene's sand.
-        control_dt: duration of one ``step``, s.
+        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
     """
 
     tool = "spade"
@@ -220,24 +219,12 @@ class SpatialSpadeScene:
     ) -> None:
         if not 1 <= int(n_spheres) <= MAX_SPHERES:
             raise ValueError(f"n_spheres must be in 1..{MAX_SPHERES}, got {n_spheres!r}")
-        require_counts(substeps=substeps)
-        require_positive(control_dt=control_dt)
+        super().__init__(control_dt, substeps)
         self.n_spheres = int(n_spheres)
-        self.substeps = int(substeps)
         self.material = material
-        self.control_dt = float(control_dt)
         self.shapes = tool_shapes("spade")
         self.parameters: tuple[ParameterSpec, ...] = (
-            ParameterSpec(
-                "sand_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
-                description="centre of the sand deposit's floor",
-                axes=(0, 1),
-            ),
+            world_position("sand_position", "centre of the sand deposit's floor", axes=(0, 1)),
             ParameterSpec(
                 "sand_yaw",
                 "uniform",
@@ -246,18 +233,8 @@ class SpatialSpadeScene:
                 unit="rad",
                 description="yaw of the deposit (its open side faces its +y)",
             ),
-            ParameterSpec(
-                "goal_position",
-                "position",
-                low=(-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-                high=(WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-                on_ground=True,
-                unit="m",
-                description="centre of the goal box's floor",
-                axes=(0, 1),
-            ),
+            world_position("goal_position", "centre of the goal box's floor", axes=(0, 1)),
         )
-        self.batch_size = 0
         # The state of the B instances, built by reset.
         self.sand_position, self.sand_yaw, self.goal_position = np.zeros(3), 0.0, np.zeros(3)  # m, rad, m
         self.walls = StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
