@@ -143,8 +143,8 @@ def select_by_robot_execution(
     progress: bool = True,
     time_scales: tuple[float, ...] | None = None,
 ) -> RobotSelection:
-    """Track every candidate (:func:`~toolimit.trajopt.track.track`), replay the robot in its scene ``replays`` times and
-    pick the candidate with the highest mean robot reward.
+    """Track every candidate (:func:`~toolimit.trajopt.track.track`), replay the robot in its scene
+    ``replays`` times and pick the candidate with the highest mean robot reward.
 
     ``time_scales``: the slow-down factors to track each candidate at (the module docstring says
     how one is kept); None tracks at ``options.time_scale`` only. Candidate k's tracking and
