@@ -37,7 +37,7 @@ RUN_JSON = "run.json"
 DEFAULT_TIMESTEPS = {"planar": 300_000, "3d": 1_500_000}
 #: Alignment candidates by default, per world: the robot's selection needs good ones to choose from.
 #: Measured on the 3D spade (spade_00, seed 0, time scales 1, 1.5, 2): the best robot replay of 5
-#: candidates earns 6.9 spheres, of 20 candidates 15.5 (the alignment takes 19-30 s for 20).
+#: candidates earns 6.5 spheres, of 20 candidates 9.7 (the alignment takes 20-50 s for 20).
 DEFAULT_CANDIDATES = {"planar": 5, "3d": 20}
 #: Time scales the robot's selection tries, per world (``toolimit trajopt --time-scale``): in 3D the
 #: demonstration's own speed usually earns most (a slowed throw falls short of the box), slower

@@ -10,11 +10,11 @@ The time scale is chosen the same way when several are given: each candidate is 
 scale and keeps the one whose robot replay earns the most (ties: the lower median position error).
 Tracking accuracy alone is the wrong criterion for a task whose reward depends on the motion's
 speed. Measured on the 3D spade (Panda, ``--velocity-weight 1e-4``, 10 replays): the authors'
-``spade_video1_aligned`` in its own scene earns 11.4 at real time (median error 6.1 cm, the robot
-lags at its velocity limits) and 6.3-6.6 at scales 2-5 (0.1-2 cm), where the tool alone also
-earns less (8.7 at real time, 3.5 at scale 5: a slowed throw does not reach the box); on the
-``spade_00`` alignment (seed 0) the best candidate earns 6.9 at real time and 1.6 at the scale 3
-that a 1 cm median error asks for.
+``spade_video1_aligned`` in its own scene earns 9.3 spheres at real time (median error 6.1 cm: the
+robot lags at its velocity limits) and 6.0-7.5 at scales 1.5-5 (4.5-0.1 cm), where the tool alone
+also earns less (8.2 at real time, 3.2 at scale 5: a slowed throw falls short of the box); of the
+20 candidates of ``spade_00`` (seed 0), 5 keep real time (among them the best: 9.7 spheres, 4.6 at
+scale 1.5), 10 keep 1.5 and 4 keep 2.
 """
 
 from __future__ import annotations
