@@ -126,18 +126,18 @@ def run_toolimit(targets: tp.Targets, guesses: np.ndarray, repeats: int, robot, 
     result = track(robot, pose_targets, options, guesses=guesses)
     multistart = time.perf_counter() - started
     stats = result.statistics
-    best_start = int(stats["start_index"])
+    best_start = stats.start_index
     problem = TrackingProblem(robot, pose_targets, dt, tp.Q0_ARM, weights)
     times = []
-    rollout = stats.get("initialisation", "hold") == "rollout"
+    rollout = stats.initialisation == "rollout"
     for _ in range(repeats):
         begun = time.perf_counter()
         q_guess = ik_rollout(problem, guesses[best_start]) if rollout else None
         solve_sqp(problem, guesses[best_start], options.sqp, q_guess=q_guess)
         times.append(time.perf_counter() - begun)
     q_trajectory, u_trajectory = _problem_layout(result.base, guesses[best_start], result.q, dt)
-    return SolverRun(q_trajectory, u_trajectory, float(stats["cost"]), int(stats["iterations"]),
-                     bool(stats["converged"]), times, multistart, list(stats["start_costs"]), best_start)
+    return SolverRun(q_trajectory, u_trajectory, stats.cost, stats.iterations,
+                     stats.converged, times, multistart, list(stats.start_costs), best_start)
 
 
 def solver_report(problem, run: SolverRun, with_static_ik: bool) -> dict:
@@ -174,7 +174,7 @@ def time_scale_variant(robot_model: tp.PandaOnBase, targets: tp.Targets, robot) 
     dt = result.time_scale / targets.fps
     problem = tp.make_problem(robot_model, targets, dt=dt)
     guesses = tp.initial_base_guesses(robot_model, targets)
-    start = int(result.statistics["start_index"])
+    start = result.statistics.start_index
     q_trajectory, _ = _problem_layout(result.base, guesses[start], result.q, dt)
     toolimit_metrics = tp.trajectory_metrics(problem, q_trajectory, with_static_ik=False)
     crocoddyl_run = run_crocoddyl(problem, guesses, repeats=0)
@@ -184,7 +184,7 @@ def time_scale_variant(robot_model: tp.PandaOnBase, targets: tp.Targets, robot) 
     return {
         "time_scale": result.time_scale,
         "dt": dt,
-        "search": result.statistics.get("time_scale_search"),
+        "search": result.statistics.time_scale_search.to_json(),
         "toolimit": {**{key: toolimit_metrics[key] for key in keep}, "total_time_s": elapsed},
         "crocoddyl_same_time_scale": {**{key: crocoddyl_metrics[key] for key in keep},
                                       "multistart_total_time_s": crocoddyl_run.multistart_total_time_s},

@@ -92,7 +92,7 @@ def test_exports_what_trajopt_saves(tmp_path):
     result = TrajectoryResult(
         robot="panda", tool="spade", joint_names=tuple(JOINTS), q=q, v=v, base=base, dt=DT, time_scale=1.0,
         position_error=np.zeros(horizon), rotation_error=np.zeros(horizon), limit_margin=np.ones_like(q),
-        velocity_ratio=np.zeros_like(v), statistics={},
+        velocity_ratio=np.zeros_like(v),
     )
     saved = result.save(tmp_path / "from_trajopt")
     assert main(["export", "--trajectory", str(saved), "--robot", "panda", "--out", str(tmp_path / "robot")]) == 0

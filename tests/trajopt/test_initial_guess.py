@@ -37,8 +37,8 @@ def test_track_runs_every_initialisation(planar3):
     options = TrackOptions(sqp=SqpOptions(max_iterations=10), starts=2, q_start=path[0],
                            initialisations=("hold", "rollout"), merge_distance=0.0)
     result = track(planar3, targets, options)
-    assert len(result.statistics["start_costs"]) == 4
-    assert result.statistics["initialisation"] in ("hold", "rollout")
-    assert result.statistics["cost"] == min(result.statistics["start_costs"])
+    assert len(result.statistics.start_costs) == 4
+    assert result.statistics.initialisation in ("hold", "rollout")
+    assert result.statistics.cost == min(result.statistics.start_costs)
     with pytest.raises(ValueError, match="initialisations"):
         TrackOptions(initialisations=("guess",))

@@ -31,7 +31,7 @@ def test_robot_tracks_the_real_spade_trajectory(video_demos_dir, robot_name, rec
     assert np.all(result.q >= robot.lower) and np.all(result.q <= robot.upper), "joint-limit violation"
     assert np.all(np.abs(result.v) <= robot.velocity_limit * (1 + 1e-12)), "velocity-limit violation"
     assert result.limit_violations == 0 and result.velocity_violations == 0
-    assert result.statistics["cost"] < 0.8 * result.statistics["initial_cost"]
+    assert result.statistics.cost < 0.8 * result.statistics.initial_cost
 
     reachable = reachable_steps(robot, result.base, targets.positions, result.q[1:])
     share = float(reachable.mean())

@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
 
+from toolimit.artifacts import json_text
 from toolimit.scenes.base import ParameterSpec
 from toolimit.tools import ToolPose
 from toolimit.scenes import replay
 from toolimit.trajopt import SqpOptions, TrackOptions, TrajectoryResult, execute_in_scene, track
 from toolimit.trajopt.execution import resample_joints
+from toolimit.trajopt.result import TimeScaleSearch, TrackingStatistics
 from trajopt_helpers import FPS, reachable_path, targets_of
 
 
@@ -47,12 +50,28 @@ def test_save_load_round_trip(tmp_path, planar_result):
     for name in ("q", "v", "base", "position_error", "rotation_error", "limit_margin", "velocity_ratio"):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(result, name))
     assert loaded.joint_names == result.joint_names and loaded.dt == result.dt
-    assert loaded.statistics["cost"] == result.statistics["cost"]
+    assert loaded.statistics.cost == result.statistics.cost
+
+
+def test_statistics_json_round_trip_and_older_files(planar_result):
+    """The typed statistics survive their JSON form; a record of an older writer (with the time scale
+    it no longer repeats) still reads."""
+    _, result = planar_result
+    search = TimeScaleSearch(median_position_error_m={1.0: 0.02, 1.5: 0.004}, threshold_m=0.01, threshold_met=True)
+    statistics = dataclasses.replace(result.statistics, time_scale_search=search)
+    record = json.loads(json_text(statistics.to_json()))
+    assert record["time_scale_search"]["median_position_error_m"] == {"1": 0.02, "1.5": 0.004}
+    assert TrackingStatistics.from_json(record) == statistics
+    older = json.loads(json_text(result.statistics.to_json())) | {"time_scale": 1.0}
+    assert "time_scale_search" not in older
+    assert TrackingStatistics.from_json(older) == result.statistics
 
 
 def test_failed_save_leaves_nothing(tmp_path, planar_result):
     _, result = planar_result
-    broken = TrajectoryResult(**{**result.__dict__, "statistics": {"not json": object()}})
+    broken = dataclasses.replace(
+        result, statistics=dataclasses.replace(result.statistics, cost_terms={"not json": object()})
+    )
     with pytest.raises(TypeError):
         broken.save(tmp_path / "out")
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
@@ -148,7 +167,7 @@ def test_a_result_turned_half_a_turn_is_described_as_upside_down():
             robot="planar3", tool="spade", joint_names=("a", "b", "c"), q=np.zeros((horizon + 1, 3)),
             v=np.zeros((horizon, 3)), base=np.zeros(3), dt=0.1, time_scale=1.0,
             position_error=np.full(horizon, 0.002), rotation_error=rotation_error,
-            limit_margin=np.ones((horizon + 1, 3)), velocity_ratio=np.zeros((horizon, 3)), statistics={"cost": 1.0},
+            limit_margin=np.ones((horizon + 1, 3)), velocity_ratio=np.zeros((horizon, 3)),
         )
     flipped = result(np.full(horizon, np.pi))
     assert flipped.upside_down and flipped.summary()["upside_down"]

@@ -65,12 +65,12 @@ def test_multistart_keeps_the_best_start(planar3):
     one_step = SqpOptions(max_iterations=1)  # each start stays in its own neighbourhood
     options = TrackOptions(sqp=one_step, q_start=path[0], merge_distance=0.0, initialisations=HOLD)
     result = track(planar3, targets, options, guesses=guesses)
-    costs = result.statistics["start_costs"]
+    costs = result.statistics.start_costs
     assert len(costs) == 3
-    assert result.statistics["cost"] == min(costs)
-    assert result.statistics["start_index"] == 1 == int(np.argmin(costs))
+    assert result.statistics.cost == min(costs)
+    assert result.statistics.start_index == 1 == int(np.argmin(costs))
     assert max(costs) > 1.5 * min(costs), "the far starts should end worse"
-    assert result.statistics["cost_terms"]["total"] == pytest.approx(result.statistics["cost"])
+    assert result.statistics.cost_terms["total"] == pytest.approx(result.statistics.cost)
     assert isinstance(result, TrajectoryResult) and result.q.shape == (21, 3) and result.v.shape == (20, 3)
 
 
@@ -79,7 +79,7 @@ def test_runs_joining_a_converged_basin_stop_early(planar3):
     guesses = np.array([[0.31, 0, 0], [0.29, 0, 0]])
     options = TrackOptions(sqp=SqpOptions(), q_start=path[0], merge_distance=0.05, initialisations=HOLD)
     result = track(planar3, targets, options, guesses=guesses)
-    assert result.statistics["starts_merged"] == 1
+    assert result.statistics.starts_merged == 1
 
 
 def test_bases_inside_scene_footprints_are_rejected(planar3):
@@ -102,7 +102,7 @@ def test_bases_inside_scene_footprints_are_rejected(planar3):
         assert "inside a scene element" in str(error)
     else:
         assert base_in_footprints(restricted.base, around_best) is None
-        assert restricted.statistics["starts_rejected_in_footprints"] >= 1
+        assert restricted.statistics.starts_rejected_in_footprints >= 1
     everywhere = np.array([[0.0, 0.0, 100.0, 100.0, 0.0]])
     with pytest.raises(ValueError, match="every one of the 4 solutions puts the robot base inside a scene element"):
         # 2 base guesses x the 2 default joint initialisations
@@ -115,7 +115,7 @@ def test_roll_symmetric_tool_tries_the_turned_targets():
     path = reachable_path(arm, 12)
     targets = targets_of(arm, path, np.zeros(3)).rotated_about_tool_z(np.pi)  # the other way round
     result = track(arm, targets, TrackOptions(sqp=QUICK, q_start=path[0], starts=2))
-    assert result.statistics["roll_variant"] == 1
+    assert result.statistics.roll_variant == 1
     # errors are measured against the chosen variant (the other one is pi away)
     assert np.median(result.rotation_error) < 0.3
 

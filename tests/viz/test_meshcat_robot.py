@@ -35,7 +35,7 @@ def make_trajectory(robot_name: str) -> tuple:
     base = BASES[robot_name]
     positions, rotations = robot.tool_poses(q[1:], base)
     targets = PoseTargets(positions + [0.0, 0.0, 0.02], rotations, fps=24.0)
-    trajectory = evaluate_trajectory(robot, targets, base, q, DT, 2.0, {})
+    trajectory = evaluate_trajectory(robot, targets, base, q, DT, 2.0, None)
     return robot, trajectory, targets
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +18,7 @@ import numpy as np
 
 from toolimit.artifacts import atomic_path, json_text
 from toolimit.errors import InputError
+from toolimit.trajopt.problem import TrackingWeights
 
 TRAJECTORY_NPZ = "trajectory.npz"
 TRAJECTORY_JSON = "trajectory.json"
@@ -77,6 +78,111 @@ def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
 
 
 @dataclass(frozen=True)
+class TimeScaleSearch:
+    """How :func:`~toolimit.trajopt.time_scale.choose_time_scale` chose the slow-down factor, kept
+    so that a reader of trajectory.json sees what the other scales would have given.
+
+    Attributes:
+        median_position_error_m: median tool position error (m) of the kept run at each time scale
+            tried, by scale, in the order tried (ascending; the search stops at the first that meets
+            the threshold).
+        threshold_m: the median position error a scale had to stay under, metres.
+        threshold_met: whether the chosen scale stays under it (False: the best-tracking scale was kept).
+    """
+
+    median_position_error_m: dict[float, float]
+    threshold_m: float
+    threshold_met: bool
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON form (scales written as ``f"{scale:g}"``)."""
+        errors = {f"{scale:g}": error for scale, error in self.median_position_error_m.items()}
+        return {"median_position_error_m": errors, "threshold_m": self.threshold_m, "threshold_met": self.threshold_met}
+
+    @classmethod
+    def from_json(cls, record: dict[str, Any]) -> TimeScaleSearch:
+        """The search written by :meth:`to_json`."""
+        errors = {float(scale): float(error) for scale, error in record["median_position_error_m"].items()}
+        return cls(errors, float(record["threshold_m"]), bool(record["threshold_met"]))
+
+
+@dataclass(frozen=True)
+class TrackingStatistics:
+    """What :func:`~toolimit.trajopt.track.track` did to find a trajectory: the kept run's cost and
+    solver figures and how the other starts ended, so that a result can be compared and traced.
+
+    Attributes:
+        cost: J of the kept run (dimensionless; see :mod:`toolimit.trajopt.problem`).
+        initial_cost: J at the kept run's initialisation.
+        cost_terms: J's terms by name (``pose``, ``velocity``, ``posture``) and their sum ``total``.
+        iterations: SQP iterations of the kept run.
+        qp_iterations: OSQP iterations of the kept run, all SQP iterations together.
+        converged: the kept run stopped on its relative-decrease test (not its iteration limit).
+        start_index: the kept run's row of the base guesses.
+        roll_variant: 0 when the kept run tracks the targets, 1 when it tracks them turned by pi
+            about the tool axis (a roll-symmetric tool).
+        initialisation: the kept run's joint initialisation, ``"hold"`` or ``"rollout"``.
+        start_costs: J of every run, ordered by roll variant, initialisation, start; None where the
+            run's base stood inside a scene element.
+        starts_rejected_in_footprints: runs discarded because their base stood inside an element.
+        starts_merged: runs stopped early on joining a converged run's basin.
+        wall_time_s: seconds of the whole multi-start.
+        best_start_wall_time_s: seconds of the kept run.
+        weights: the cost weights J was built with.
+        time_scale_search: how the time scale was chosen, or None when it was given.
+    """
+
+    cost: float
+    initial_cost: float
+    cost_terms: dict[str, float]
+    iterations: int
+    qp_iterations: int
+    converged: bool
+    start_index: int
+    roll_variant: int
+    initialisation: str
+    start_costs: tuple[float | None, ...]
+    starts_rejected_in_footprints: int
+    starts_merged: int
+    wall_time_s: float
+    best_start_wall_time_s: float
+    weights: TrackingWeights
+    time_scale_search: TimeScaleSearch | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON form, ``statistics`` of trajectory.json (no ``time_scale_search`` key when None)."""
+        record = asdict(self) | {"start_costs": list(self.start_costs)}
+        del record["time_scale_search"]
+        if self.time_scale_search is not None:
+            record["time_scale_search"] = self.time_scale_search.to_json()
+        return record
+
+    @classmethod
+    def from_json(cls, record: dict[str, Any]) -> TrackingStatistics:
+        """The statistics written by :meth:`to_json` (keys of older writers that it no longer writes,
+        such as ``time_scale``, are ignored)."""
+        search = record.get("time_scale_search")
+        return cls(
+            cost=float(record["cost"]),
+            initial_cost=float(record["initial_cost"]),
+            cost_terms={name: float(value) for name, value in record["cost_terms"].items()},
+            iterations=int(record["iterations"]),
+            qp_iterations=int(record["qp_iterations"]),
+            converged=bool(record["converged"]),
+            start_index=int(record["start_index"]),
+            roll_variant=int(record["roll_variant"]),
+            initialisation=str(record["initialisation"]),
+            start_costs=tuple(None if cost is None else float(cost) for cost in record["start_costs"]),
+            starts_rejected_in_footprints=int(record["starts_rejected_in_footprints"]),
+            starts_merged=int(record["starts_merged"]),
+            wall_time_s=float(record["wall_time_s"]),
+            best_start_wall_time_s=float(record["best_start_wall_time_s"]),
+            weights=TrackingWeights(**record["weights"]),
+            time_scale_search=None if search is None else TimeScaleSearch.from_json(search),
+        )
+
+
+@dataclass(frozen=True)
 class TrajectoryResult:
     """An optimised robot trajectory and how well it tracks its targets.
 
@@ -93,7 +199,8 @@ class TrajectoryResult:
         limit_margin: (T+1, N) distance of each joint to its nearest position limit, radians
             (negative = violation).
         velocity_ratio: (T, N) |v| / velocity limit (above 1 = violation).
-        statistics: solver statistics (cost, cost terms, iterations, converged, wall time, starts).
+        statistics: how :func:`~toolimit.trajopt.track.track` found the trajectory; None for a
+            trajectory made another way (by hand, in tests).
     """
 
     robot: str
@@ -108,7 +215,12 @@ class TrajectoryResult:
     rotation_error: np.ndarray
     limit_margin: np.ndarray
     velocity_ratio: np.ndarray
-    statistics: dict[str, Any] = field(default_factory=dict)
+    statistics: TrackingStatistics | None = None
+
+    @property
+    def cost(self) -> float:
+        """J of the trajectory (see :mod:`toolimit.trajopt.problem`); NaN without statistics."""
+        return float("nan") if self.statistics is None else self.statistics.cost
 
     @property
     def horizon(self) -> int:
@@ -134,7 +246,7 @@ class TrajectoryResult:
     def describe(self) -> str:
         """One line: time scale, cost, median position and rotation errors, violations."""
         text = (
-            f"time scale {self.time_scale:g}, J = {self.statistics.get('cost', float('nan')):.4f}, "
+            f"time scale {self.time_scale:g}, J = {self.cost:.4f}, "
             f"position error median {np.median(self.position_error) * 100:.1f} cm, rotation error median "
             f"{np.degrees(np.median(self.rotation_error)):.0f} deg, limit violations {self.limit_violations}, "
             f"velocity violations {self.velocity_violations}"
@@ -160,7 +272,7 @@ class TrajectoryResult:
             "limit_violations": self.limit_violations,
             "max_velocity_ratio": float(self.velocity_ratio.max()),
             "velocity_violations": self.velocity_violations,
-            "statistics": self.statistics,
+            "statistics": None if self.statistics is None else self.statistics.to_json(),
         }
 
     def save(self, directory: str | os.PathLike[str]) -> Path:
@@ -189,13 +301,19 @@ class TrajectoryResult:
 
     @classmethod
     def load(cls, directory: str | os.PathLike[str]) -> TrajectoryResult:
-        """Read a result written by :meth:`save`; a clear error for a missing or malformed file."""
+        """Read a result written by :meth:`save`; a clear error for a missing or malformed file.
+
+        ``statistics`` written empty (``{}``, by older writers) or ``null`` reads as None."""
         arrays = load_trajectory(directory)
         json_path = Path(directory) / TRAJECTORY_JSON
         if not json_path.is_file():
             raise FileNotFoundError(f"{json_path}: no such file (expected a trajopt output directory)")
         q, v = arrays.q, arrays.v
         document = json.loads(json_path.read_text())
+        try:
+            statistics = TrackingStatistics.from_json(document["statistics"]) if document["statistics"] else None
+        except KeyError as error:
+            raise InputError(f"{json_path}: statistics lack the field {error}") from None
         return cls(
             robot=document["robot"],
             tool=document["tool"],
@@ -209,7 +327,7 @@ class TrajectoryResult:
             rotation_error=np.asarray(document["rotation_error"], dtype=float),
             limit_margin=np.asarray(document["limit_margin"], dtype=float).reshape(q.shape),
             velocity_ratio=np.asarray(document["velocity_ratio"], dtype=float).reshape(v.shape),
-            statistics=document["statistics"],
+            statistics=statistics,
         )
 
 

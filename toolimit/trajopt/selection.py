@@ -77,7 +77,7 @@ class RobotSelection:
                 {
                     "alignment_reward": candidate.alignment_reward,
                     "robot_reward": None if np.isnan(reward) else float(reward),
-                    "cost": None if trajectory is None else trajectory.statistics["cost"],
+                    "cost": None if trajectory is None else trajectory.cost,
                     "time_scale": None if trajectory is None else trajectory.time_scale,
                     "median_position_error_m": None
                     if trajectory is None
@@ -192,6 +192,6 @@ def select_by_robot_execution(
     bar.close()
     robot_rewards = np.array(rewards)
     ranked = [k for k in range(len(candidates)) if robot_rewards[k] > 0]
-    costs = [float("nan") if trajectory is None else trajectory.statistics["cost"] for trajectory in trajectories]
+    costs = [float("nan") if trajectory is None else trajectory.cost for trajectory in trajectories]
     best = min(ranked, key=lambda k: (-robot_rewards[k], costs[k]), default=None)
     return RobotSelection(best, trajectories, robot_rewards, refusals, by_scale)

@@ -13,7 +13,7 @@ import numpy as np
 
 from toolimit.robots import RobotModel
 from toolimit.trajopt.problem import PoseTargets
-from toolimit.trajopt.result import TrajectoryResult
+from toolimit.trajopt.result import TimeScaleSearch, TrajectoryResult
 from toolimit.trajopt.track import TrackOptions, track
 
 #: Slow-down factors tried by ``--time-scale auto``, ascending.
@@ -33,27 +33,23 @@ def choose_time_scale(
     """Track at each scale of ``grid`` in ascending order; return the first result whose median
     position error is below ``threshold`` (m), or the best-tracking one if none is.
 
-    The returned result's statistics hold ``time_scale_search``: the median error at each scale
+    The returned result's ``statistics.time_scale_search`` holds the median error at each scale
     tried and whether the threshold was met.
     """
     if not grid:
         raise ValueError("the time-scale grid is empty")
-    tried: dict[str, float] = {}
+    tried: dict[float, float] = {}
     best: TrajectoryResult | None = None
     for scale in sorted(grid):
         result = track(robot, targets, replace(options, time_scale=float(scale)), rng=rng)
         median = float(np.median(result.position_error))
-        tried[f"{scale:g}"] = median
+        tried[float(scale)] = median
         if best is None or median < float(np.median(best.position_error)):
             best = result
         if median < threshold:
             best = result
             break
-    assert best is not None  # the grid is not empty
+    assert best is not None and best.statistics is not None  # the grid is not empty; track records statistics
     met = float(np.median(best.position_error)) < threshold
-    best.statistics["time_scale_search"] = {
-        "median_position_error_m": tried,
-        "threshold_m": threshold,
-        "threshold_met": met,
-    }
-    return best
+    search = TimeScaleSearch(median_position_error_m=tried, threshold_m=threshold, threshold_met=met)
+    return replace(best, statistics=replace(best.statistics, time_scale_search=search))

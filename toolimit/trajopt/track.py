@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -36,7 +36,7 @@ from toolimit.robots import RobotModel
 from toolimit.tools import wrap_angle
 from toolimit.trajopt.initial_guess import ik_rollout
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
-from toolimit.trajopt.result import TrajectoryResult
+from toolimit.trajopt.result import TrackingStatistics, TrajectoryResult
 from toolimit.trajopt.sqp import SqpOptions, SqpOutcome, solve_sqp
 
 #: Joint-trajectory initialisations of a run (see the module docstring).
@@ -151,10 +151,9 @@ def track(
 ) -> TrajectoryResult:
     """Optimise base and joint trajectory to follow ``targets``; the best start is returned.
 
-    ``guesses`` (S, 3) replaces the generated base initialisations. The result's statistics hold
-    the cost J and its terms, the best run's iterations, ``start_costs`` (J of each run, ordered by
-    variant, initialisation, start; None where the base stood in a footprint), merged and rejected
-    counts, wall time.
+    ``guesses`` (S, 3) replaces the generated base initialisations. The result's
+    :class:`~toolimit.trajopt.result.TrackingStatistics` hold the cost J and its terms, the best
+    run's iterations, the cost of every run, merged and rejected counts, wall time.
     """
     started = time.perf_counter()
     dt = options.time_scale / targets.fps
@@ -192,24 +191,23 @@ def track(
         raise BaseInsideFootprint(f"every one of the {rejected} solutions puts the robot base inside a scene element")
     run = min(runs, key=lambda run: run.outcome.cost)
     best, problem = run.outcome, run.problem
-    statistics = {
-        "cost": best.cost,
-        "initial_cost": best.cost_history[0],
-        "cost_terms": problem.cost_terms(best.base, best.q),
-        "iterations": best.iterations,
-        "qp_iterations": best.qp_iterations,
-        "converged": best.converged,
-        "start_index": run.start_index,
-        "roll_variant": run.variant_index,
-        "initialisation": run.initialisation,
-        "start_costs": start_costs,
-        "starts_rejected_in_footprints": rejected,
-        "starts_merged": merged,
-        "wall_time_s": time.perf_counter() - started,
-        "best_start_wall_time_s": best.wall_time_s,
-        "time_scale": options.time_scale,
-        "weights": asdict(options.weights),
-    }
+    statistics = TrackingStatistics(
+        cost=best.cost,
+        initial_cost=best.cost_history[0],
+        cost_terms=problem.cost_terms(best.base, best.q),
+        iterations=best.iterations,
+        qp_iterations=best.qp_iterations,
+        converged=best.converged,
+        start_index=run.start_index,
+        roll_variant=run.variant_index,
+        initialisation=run.initialisation,
+        start_costs=tuple(start_costs),
+        starts_rejected_in_footprints=rejected,
+        starts_merged=merged,
+        wall_time_s=time.perf_counter() - started,
+        best_start_wall_time_s=best.wall_time_s,
+        weights=options.weights,
+    )
     return evaluate_trajectory(robot, problem.targets, best.base, best.q, dt, options.time_scale, statistics)
 
 
@@ -249,9 +247,10 @@ def evaluate_trajectory(
     q: np.ndarray,
     dt: float,
     time_scale: float,
-    statistics: dict,
+    statistics: TrackingStatistics | None,
 ) -> TrajectoryResult:
-    """Errors, limit margins and velocity ratios of a trajectory q (T+1, N) at ``base`` (3,)."""
+    """Errors, limit margins and velocity ratios of a trajectory q (T+1, N) at ``base`` (3,), with
+    the ``statistics`` of the solve that found it (None for a trajectory made another way)."""
     positions, rotations = robot.tool_poses(q[1:], base)
     position_error = np.linalg.norm(positions - targets.positions, axis=1)
     relative = np.swapaxes(targets.rotations, 1, 2) @ rotations
