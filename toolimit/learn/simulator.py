@@ -72,8 +72,10 @@ class TaskSimulator:
         self.horizon = task.horizon
         self.q = np.zeros((self.batch_size, self.n_joints))
         self.t = 0
-        self._quaternion = np.zeros((self.batch_size, 4))
-        self._position = np.zeros((self.batch_size, 3))
+        # the tool's pose at the current step (world frame), set by reset and step
+        self._position = np.zeros((self.batch_size, 3))  # (B, 3) m
+        self._rotation = np.zeros((self.batch_size, 3, 3))  # (B, 3, 3) world from tool
+        self._quaternion = np.zeros((self.batch_size, 4))  # (B, 4) w first, sign continuous
 
     # ------------------------------------------------------------------------------------ episode
     def reset(self, rng: np.random.Generator) -> np.ndarray:
