@@ -100,8 +100,8 @@ def test_planting_after_the_window_is_not_a_success():
     strike(late, 4.0, overshoot=0.03)
     strike(early, 4.0, overshoot=0.03)
     assert late.goal_reward()[0] == early.goal_reward()[0] == 1.0
-    assert late.planted_time[0] > late.success_window and not late.is_success()[0]
-    assert early.planted_time[0] < early.success_window and early.is_success()[0]
+    assert late.goal_timer.met_at[0] > late.success_window and not late.is_success()[0]
+    assert early.goal_timer.met_at[0] < early.success_window and early.is_success()[0]
 
 
 def test_striking_beside_the_nail_does_nothing():

@@ -229,6 +229,30 @@ class SuccessTracker:
         return self.successful_steps >= SUCCESS_FRACTION * self.steps
 
 
+class GoalTimer:
+    """Per instance, when the goal was first met on the scene's clock; success is meeting it within
+    the scene's success window (the hammers' and scythes' test: the paper's "within the first
+    second"). The scene says when its clock starts (the first step, or the tool's placement)."""
+
+    def __init__(self, batch_size: int) -> None:
+        self.time = 0.0  # s on the scene's clock
+        self.met_at = np.full(batch_size, np.inf)  # (B,) s; inf where the goal was not met yet
+
+    def advance(self, dt: float) -> None:
+        """Move the clock on by ``dt`` seconds."""
+        self.time += dt
+
+    def record(self, goal_met: np.ndarray | np.bool_, at: np.ndarray | float | None = None) -> None:
+        """Note the goal met where ``goal_met`` (B,) bool says so for the first time, at ``at``
+        ((B,) or () s; the clock's time when None)."""
+        when = self.time if at is None else at
+        self.met_at = np.where(goal_met & np.isinf(self.met_at), when, self.met_at)
+
+    def within(self, window: float) -> np.ndarray:
+        """(B,) bool: the goal was met at most ``window`` seconds after the clock's start."""
+        return self.met_at <= window + 1e-9
+
+
 def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:
     """Validate a ``reset`` call before any work; returns B as an int.
 

@@ -37,6 +37,7 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    GoalTimer,
     ParameterSpec,
     SceneBase,
     SceneParams,
@@ -121,8 +122,7 @@ class PlanarHammerScene(SceneBase):
         self._nails: list[pymunk.Body] = []
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
         self._tool_shapes: list[tuple[pymunk.Poly, pymunk.Segment]] = []
-        self._time = 0.0
-        self._planted_at = np.zeros(0)
+        self.goal_timer = GoalTimer(0)  # from the start of the first step
 
     # ----------------------------------------------------------------------------------- parameters
     # ----------------------------------------------------------------------------------- reset/step
@@ -147,8 +147,7 @@ class PlanarHammerScene(SceneBase):
             for shape in (head, handle):
                 shape.friction = 0.5
             self._tool_shapes.append((head, handle))
-        self._time = 0.0
-        self._planted_at = np.full(batch_size, np.inf)
+        self.goal_timer = GoalTimer(batch_size)
 
     def _add_nail(self, space: pymunk.Space) -> pymunk.Body:
         """The nail body with its guide and friction joints; body origin = head top, plane m."""
@@ -188,9 +187,8 @@ class PlanarHammerScene(SceneBase):
             for _ in range(self.substeps):
                 space.step(dt)
         self._tool.end_step()
-        self._time += self.control_dt
-        planted = self.goal_reward() > 0
-        self._planted_at = np.where(planted & ~np.isfinite(self._planted_at), self._time, self._planted_at)
+        self.goal_timer.advance(self.control_dt)
+        self.goal_timer.record(self.goal_reward() > 0)
 
     # ----------------------------------------------------------------------------------- rewards
     def travel(self) -> np.ndarray:
@@ -216,7 +214,7 @@ class PlanarHammerScene(SceneBase):
     def is_success(self) -> np.ndarray:
         """(B,) the nail was planted within ``success_window`` s of the first step's start."""
         require_reset(self)
-        return self._planted_at <= self.success_window + 1e-9
+        return self.goal_timer.within(self.success_window)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

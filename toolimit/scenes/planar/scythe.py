@@ -31,6 +31,7 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    GoalTimer,
     ParameterSpec,
     SceneBase,
     SceneParams,
@@ -92,8 +93,7 @@ class PlanarScytheScene(SceneBase):
         self.cut = np.zeros((0, self.stalk_count), dtype=bool)  # (B, M)
         self._spaces: list[pymunk.Space] = []
         self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
-        self._time = 0.0
-        self._all_cut_at = np.zeros(0)
+        self.goal_timer = GoalTimer(0)  # from the start of the first step
 
     # ----------------------------------------------------------------------------------- parameters
     # ----------------------------------------------------------------------------------- reset/step
@@ -110,8 +110,7 @@ class PlanarScytheScene(SceneBase):
         self._spaces = [pymunk.Space() for _ in range(batch_size)]
         self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
         self.batch_size = batch_size
-        self._time = 0.0
-        self._all_cut_at = np.full(batch_size, np.inf)
+        self.goal_timer = GoalTimer(batch_size)
 
     def step(self, tool_pose: ToolPose) -> None:
         """Move the blade to ``tool_pose`` over ``control_dt`` and cut what it sweeps."""
@@ -124,9 +123,8 @@ class PlanarScytheScene(SceneBase):
         for space in self._spaces:  # kinematic bodies integrate exactly over one step
             space.step(self.control_dt)
         self._tool.end_step()
-        self._time += self.control_dt
-        done = self.cut.all(axis=1)
-        self._all_cut_at = np.where(done & ~np.isfinite(self._all_cut_at), self._time, self._all_cut_at)
+        self.goal_timer.advance(self.control_dt)
+        self.goal_timer.record(self.cut.all(axis=1))
 
     def _cut_swept_stalks(
         self,
@@ -191,7 +189,7 @@ class PlanarScytheScene(SceneBase):
     def is_success(self) -> np.ndarray:
         """(B,) every stalk was cut within ``success_window`` s of the first step's start."""
         require_reset(self)
-        return self._all_cut_at <= self.success_window + 1e-9
+        return self.goal_timer.within(self.success_window)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -26,17 +26,17 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    GoalTimer,
     ParameterSpec,
     SceneBase,
     SceneParams,
-    batched_pose,
     check_reset,
     require_positive,
     require_reset,
     world_position,
 )
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
-from toolimit.scenes.spatial.tool_motion import interpolate_poses, tool_snapshot
+from toolimit.scenes.spatial.tool_motion import SweptTool, tool_snapshot
 from toolimit.tools import ToolPose
 
 
@@ -145,10 +145,8 @@ class SpatialHammerScene(SceneBase):
         self._start_top = 0.0
         self.nail_top = np.zeros(0)  # (B,) z of the head top, m
         self.nail_speed = np.zeros(0)  # (B,) downward speed, m/s
-        self.time = 0.0  # s since the tool was placed
-        self.planted_time = np.zeros(0)  # (B,) s
-        self.tool_position: np.ndarray | None = None  # (B, 3) world, m; None until the first step
-        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
+        self.goal_timer = GoalTimer(0)  # planted, s since the tool was placed
+        self._tool = SweptTool(0)
 
     # ----------------------------------------------------------------------------- parameters
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
@@ -164,9 +162,8 @@ class SpatialHammerScene(SceneBase):
         b = self.batch_size
         self.nail_top = np.full(b, self._start_top)
         self.nail_speed = np.zeros(b)
-        self.time = 0.0
-        self.planted_time = np.full(b, np.inf)
-        self.tool_position = self.tool_rotation = None
+        self.goal_timer = GoalTimer(b)
+        self._tool = SweptTool(b)
 
     # ---------------------------------------------------------------------------- geometry
     @property
@@ -187,12 +184,10 @@ class SpatialHammerScene(SceneBase):
     def step(self, tool_pose: ToolPose) -> None:
         """Move the hammer to ``tool_pose`` over ``control_dt`` and simulate the nail."""
         require_reset(self)
-        position, rotation = batched_pose(tool_pose, self.batch_size)
-        if self.tool_position is None or self.tool_rotation is None:
-            self.tool_position, self.tool_rotation = position, rotation
+        motion = self._tool.move(tool_pose, self.substeps)
+        if motion is None:  # placed: the clock starts
             return
-        fractions = np.arange(self.substeps + 1) / self.substeps
-        positions, rotations = interpolate_poses(self.tool_position, self.tool_rotation, position, rotation, fractions)
+        positions, rotations = motion
         # (S+1, B, P, 3) head surface points in the world frame.
         points = positions[:, :, None, :] + np.einsum("sbij,pj->sbpi", rotations, self.head_points)
         if self._may_interact(points):
@@ -200,8 +195,7 @@ class SpatialHammerScene(SceneBase):
             for k in range(self.substeps):
                 self._substep(points[k], points[k + 1], dt)
         else:
-            self.time += self.control_dt
-        self.tool_position, self.tool_rotation = position, rotation
+            self.goal_timer.advance(self.control_dt)
 
     def _may_interact(self, points: np.ndarray) -> bool:
         """Whether any nail moves or may be struck by head points (S+1, B, P, 3) in this step.
@@ -243,9 +237,8 @@ class SpatialHammerScene(SceneBase):
         on_board = top <= self.lowest_top
         self.nail_top = np.maximum(top, self.lowest_top)
         self.nail_speed = np.where(on_board, 0.0, speed)
-        self.time += dt
-        planted = self.remaining_depth() < self.planted_tolerance
-        self.planted_time = np.where(planted & np.isinf(self.planted_time), self.time, self.planted_time)
+        self.goal_timer.advance(dt)
+        self.goal_timer.record(self.remaining_depth() < self.planted_tolerance)
 
     # -------------------------------------------------------------------------------- rewards
     def goal_reward(self) -> np.ndarray:
@@ -260,14 +253,14 @@ class SpatialHammerScene(SceneBase):
         nail, reward the nail's progress); the paper's appendix coefficients are not reproduced.
         """
         progress = (self._start_top - self.nail_top) / self.protrusion
-        if self.tool_position is None:
+        if self._tool.position is None:
             return progress
         nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), self.nail_top])
-        return progress - np.linalg.norm(self.tool_position - nail_head, axis=1)
+        return progress - np.linalg.norm(self._tool.position - nail_head, axis=1)
 
     def is_success(self) -> np.ndarray:
         """(B,) planted within ``success_window`` seconds of the tool's placement."""
-        return self.planted_time <= self.success_window + 1e-9
+        return self.goal_timer.within(self.success_window)
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:
@@ -297,6 +290,6 @@ class SpatialHammerScene(SceneBase):
             "board_center": np.array([x, y, self.board_top / 2]),
             "board_half_extents": board_half,
             "remaining_depth": np.array(self.remaining_depth()[0]),
-            **tool_snapshot(self.tool_position, self.tool_rotation),
-            "time": np.array(self.time),
+            **tool_snapshot(self._tool.position, self._tool.rotation),
+            "time": np.array(self.goal_timer.time),
         }

@@ -23,10 +23,10 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    GoalTimer,
     ParameterSpec,
     SceneBase,
     SceneParams,
-    batched_pose,
     check_reset,
     require_counts,
     require_positive,
@@ -35,7 +35,7 @@ from toolimit.scenes.base import (
 )
 from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
-from toolimit.scenes.spatial.tool_motion import interpolate_poses, tool_snapshot
+from toolimit.scenes.spatial.tool_motion import SweptTool, tool_snapshot
 from toolimit.tools import ToolPose, rotation_z
 
 
@@ -158,9 +158,8 @@ class SpatialScytheScene(SceneBase):
         self.stalks_xy = np.zeros((0, self.n_stalks, 2))  # (B, N, 2) stalk positions on the ground, world x-y, m
         self.cut = np.zeros((0, self.n_stalks), dtype=bool)  # (B, N)
         self.cut_time = np.zeros((0, self.n_stalks))  # (B, N) s since the tool was placed
-        self.time = 0.0
-        self.tool_position: np.ndarray | None = None  # (B, 3) world, m; None until the first step
-        self.tool_rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
+        self.goal_timer = GoalTimer(0)  # every stalk cut, s since the tool was placed
+        self._tool = SweptTool(0)
 
     # ----------------------------------------------------------------------------- parameters
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
@@ -176,20 +175,18 @@ class SpatialScytheScene(SceneBase):
         self.stalks_xy = self.grass_position[:2] + local @ turn.T
         self.cut = np.zeros((b, self.n_stalks), dtype=bool)
         self.cut_time = np.full((b, self.n_stalks), np.inf)
-        self.time = 0.0
-        self.tool_position = self.tool_rotation = None
+        self.goal_timer = GoalTimer(b)
+        self._tool = SweptTool(b)
 
     # -------------------------------------------------------------------------------- physics
     def step(self, tool_pose: ToolPose) -> None:
         """Move the scythe to ``tool_pose`` over ``control_dt`` and cut the stalks it crosses."""
         require_reset(self)
-        position, rotation = batched_pose(tool_pose, self.batch_size)
-        if self.tool_position is None or self.tool_rotation is None:
-            self.tool_position, self.tool_rotation = position, rotation
+        motion = self._tool.move(tool_pose, self.substeps)
+        if motion is None:  # placed: the clock starts
             return
         s, b = self.substeps, self.batch_size
-        fractions = np.arange(s + 1) / s
-        positions, rotations = interpolate_poses(self.tool_position, self.tool_rotation, position, rotation, fractions)
+        positions, rotations = motion
         edges = positions[:, :, None, :] + np.einsum("sbij,ej->sbei", rotations, self.edge)  # (S+1, B, 2, 3)
         cutting_direction = rotations[..., :, 1]  # (S+1, B, 3) tool y in the world frame
         dt = self.control_dt / s
@@ -203,12 +200,12 @@ class SpatialScytheScene(SceneBase):
             dt,
         ).reshape(s, b, -1)
         # Time of the first cutting crossing, s since placement: sub-step k, fraction f -> (k + f) dt.
-        first = np.min(crossing + np.arange(s)[:, None, None], axis=0) * dt + self.time
+        first = np.min(crossing + np.arange(s)[:, None, None], axis=0) * dt + self.goal_timer.time
         newly = np.isfinite(first) & ~self.cut
         self.cut_time = np.where(newly, first, self.cut_time)
         self.cut |= newly
-        self.time += self.control_dt
-        self.tool_position, self.tool_rotation = position, rotation
+        self.goal_timer.record(self.cut.all(axis=1), at=self.cut_time.max(axis=1))  # when the last stalk fell
+        self.goal_timer.advance(self.control_dt)
 
     def _first_crossing(
         self,
@@ -252,9 +249,9 @@ class SpatialScytheScene(SceneBase):
         cut); the paper's appendix coefficients are not reproduced.
         """
         cut_count = self.goal_reward()
-        if self.tool_position is None or self.tool_rotation is None:
+        if self._tool.position is None or self._tool.rotation is None:
             return cut_count
-        edge = self.tool_position[:, None, :] + self.edge @ np.swapaxes(self.tool_rotation, 1, 2)  # (B, 2, 3)
+        edge = self._tool.position[:, None, :] + self.edge @ np.swapaxes(self._tool.rotation, 1, 2)  # (B, 2, 3)
         targets = np.concatenate(
             [self.stalks_xy, np.full(self.stalks_xy.shape[:2] + (1,), self.max_cut_height / 2)], axis=-1
         )
@@ -265,7 +262,7 @@ class SpatialScytheScene(SceneBase):
 
     def is_success(self) -> np.ndarray:
         """(B,) every stalk cut within ``success_window`` seconds of the tool's placement."""
-        return self.cut_time.max(axis=1) <= self.success_window + 1e-9
+        return self.goal_timer.within(self.success_window)
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:
@@ -282,7 +279,7 @@ class SpatialScytheScene(SceneBase):
         ``patch_yaw`` () rad, ``blade`` (2, 3) edge root and tip in the world (NaN before the
         first step), ``tool_position`` (3,), ``tool_rotation`` (3, 3), ``time`` () s.
         """
-        tool = tool_snapshot(self.tool_position, self.tool_rotation)
+        tool = tool_snapshot(self._tool.position, self._tool.rotation)
         base = np.column_stack([self.stalks_xy[0], np.zeros(self.n_stalks)])
         blade = tool["tool_position"] + self.edge @ tool["tool_rotation"].T  # NaN before the first step
         return {
@@ -294,5 +291,5 @@ class SpatialScytheScene(SceneBase):
             "patch_yaw": np.array(self.grass_yaw),
             "blade": blade,
             **tool,
-            "time": np.array(self.time),
+            "time": np.array(self.goal_timer.time),
         }

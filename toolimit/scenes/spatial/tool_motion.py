@@ -11,6 +11,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from toolimit.scenes.base import batched_pose
+from toolimit.tools import ToolPose
+
 
 def interpolate_poses(
     start_position: np.ndarray,
@@ -40,3 +43,26 @@ def tool_snapshot(position: np.ndarray | None, rotation: np.ndarray | None) -> d
     if position is None or rotation is None:
         return {"tool_position": np.full(3, np.nan), "tool_rotation": np.full((3, 3), np.nan)}
     return {"tool_position": position[0].copy(), "tool_rotation": rotation[0].copy()}
+
+
+class SweptTool:
+    """B copies of a kinematic tool: its pose at the end of the last control step and its motion
+    to the next one (constant velocity, see the module docstring). The tool is absent (pose None)
+    until the first step after ``reset`` places it."""
+
+    def __init__(self, batch_size: int) -> None:
+        self.batch_size = batch_size
+        self.position: np.ndarray | None = None  # (B, 3) world, m
+        self.rotation: np.ndarray | None = None  # (B, 3, 3) world-from-tool
+
+    def move(self, tool_pose: ToolPose, substeps: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """Move to ``tool_pose`` ((3,)/(3, 3) or (B, 3)/(B, 3, 3)); returns the poses at the S + 1
+        instants ``k / substeps`` of the motion from the last pose ((S+1, B, 3) m and
+        (S+1, B, 3, 3)), or None when this step places the tool."""
+        position, rotation = batched_pose(tool_pose, self.batch_size)
+        start_position, start_rotation = self.position, self.rotation
+        self.position, self.rotation = position, rotation
+        if start_position is None or start_rotation is None:
+            return None
+        fractions = np.arange(substeps + 1) / substeps
+        return interpolate_poses(start_position, start_rotation, position, rotation, fractions)
