@@ -1,10 +1,11 @@
-"""The scene helpers every scene shares: the spec-driven parameter check and the success tracker."""
+"""The scene helpers every scene shares: the spec-driven parameter check and the success tests."""
 
 import numpy as np
 import pytest
 
 from toolimit.scenes.base import (
     WORLD_HALF_SIZE,
+    GoalTimer,
     ParameterSpec,
     SceneBase,
     SuccessTracker,
@@ -52,6 +53,17 @@ def test_success_tracker_needs_the_goal_on_half_of_the_steps():
     for met in ([True, False], [False, False], [True, True], [False, False]):
         tracker.record(np.array(met))
     assert tracker.is_success().tolist() == [True, False]  # 2 of 4 steps, 1 of 4 steps
+
+
+def test_goal_timer_keeps_the_first_time_the_goal_was_met():
+    timer = GoalTimer(batch_size=3)
+    assert not timer.within(1.0).any()
+    for met in ([False, True, False], [True, True, False], [True, False, False]):
+        timer.advance(0.5)
+        timer.record(np.array(met))
+    timer.record(np.array([True, True, True]), at=np.array([0.1, 0.1, 1.25]))  # times given: the third is new
+    assert timer.time == 1.5 and timer.met_at.tolist() == [1.0, 0.5, 1.25]
+    assert timer.within(1.0).tolist() == [True, True, False]
 
 
 def test_scene_base_checks_the_timing_and_the_parameters_against_the_specs():
