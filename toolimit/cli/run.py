@@ -92,6 +92,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from toolimit.cli import main as toolimit
     from toolimit.cli.evaluate import EVALUATION_JSON, evaluation_record
+    from toolimit.trajopt.result import TRAJECTORY_NPZ
 
     if args.world not in DEFAULT_TIMESTEPS:
         raise CliError(f"--world: unknown world {args.world!r}; choose one of {', '.join(DEFAULT_TIMESTEPS)}")
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
         ),
         (
             "trajectory",
-            lambda: (trajectory / "trajectory.npz").is_file(),
+            lambda: (trajectory / TRAJECTORY_NPZ).is_file(),
             [
                 "trajopt",
                 "--robot",
@@ -257,14 +258,16 @@ def _export_rollout(
 
 def _check_same_run(args: argparse.Namespace, folder: Path) -> None:
     """CliError if a finished stage's folder was made for another tool, world or robot."""
+    from toolimit.align.outputs import ALIGNMENT_JSON
     from toolimit.learn.task import TASK_NPZ, LearningTask
+    from toolimit.trajopt.result import TRAJECTORY_JSON
 
     found: dict[str, str] = {}
-    if (folder / "alignment.json").is_file():
-        record = json.loads((folder / "alignment.json").read_text())
+    if (folder / ALIGNMENT_JSON).is_file():
+        record = json.loads((folder / ALIGNMENT_JSON).read_text())
         found = {"tool": record["tool"], "world": record["world"]}
-    elif (folder / "trajectory.json").is_file():
-        record = json.loads((folder / "trajectory.json").read_text())
+    elif (folder / TRAJECTORY_JSON).is_file():
+        record = json.loads((folder / TRAJECTORY_JSON).read_text())
         found = {"tool": record["tool"], "robot": record["robot"]}
     elif (folder / TASK_NPZ).is_file():
         task = LearningTask.load(folder / TASK_NPZ)
@@ -279,7 +282,10 @@ def _check_same_run(args: argparse.Namespace, folder: Path) -> None:
 
 def _alignment_done(folder: Path) -> bool:
     """An alignment that finished with candidates (no checkpoint of an interrupted search left)."""
-    return (folder / "candidates.npz").is_file() and not (folder / "alignment_checkpoint.json").is_file()
+    from toolimit.align.outputs import CANDIDATES_NPZ
+    from toolimit.cli.align import CHECKPOINT_JSON
+
+    return (folder / CANDIDATES_NPZ).is_file() and not (folder / CHECKPOINT_JSON).is_file()
 
 
 def _stage_times(out: Path) -> dict[str, float]:

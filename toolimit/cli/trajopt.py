@@ -109,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
         choose_time_scale,
         track,
     )
+    from toolimit.trajopt.result import TRAJECTORY_JSON, TRAJECTORY_NPZ
 
     check_choice("--robot", args.robot, ROBOTS, "robot")
     check_choice("--tool", args.tool, sorted(TOOLS), "tool")
@@ -163,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
             "orientation does not (trajectory.json has the error at every step)",
             file=sys.stderr,
         )
-    written = f"wrote {args.out / 'trajectory.npz'} and {args.out / 'trajectory.json'}"
+    written = f"wrote {args.out / TRAJECTORY_NPZ} and {args.out / TRAJECTORY_JSON}"
     if args.robot in SUPPORTED_ROBOTS:
         print(f"{written}; next: toolimit export --trajectory {args.out} --robot {args.robot} --out {args.out}_export")
     else:
