@@ -60,8 +60,14 @@ def json_text(data: Any) -> str:
 
 def save_json(path: str | os.PathLike[str], data: Any) -> None:
     """Write ``data`` as indented JSON (see :func:`json_text`)."""
+    save_text(path, json_text(data))
+
+
+def save_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Write ``text`` (UTF-8) atomically; returns the path."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json_text(data))
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
 
 
 def save_npz(path: str | os.PathLike[str], **arrays: Any) -> None:

@@ -87,3 +87,21 @@ def test_same_seed_same_episode(spade_task):
 def test_a_task_of_another_world_is_refused(spade_task):
     with pytest.raises(ValueError, match="the task is the spade in planar, not the spade in 3d"):
         ToolUseEnv("spade", "3d", task=spade_task)
+
+
+def test_dense_reward_adds_the_scenes_shaping_to_the_goal_reward(spade_task):
+    sparse = ToolUseEnv("spade", "planar", task=spade_task)
+    dense = ToolUseEnv("spade", "planar", task=spade_task, reward="dense")
+    sparse.reset(seed=4)
+    dense.reset(seed=4)
+    for _ in range(40):
+        _, sparse_reward, _, _, sparse_info = sparse.step(sparse.tracking_action())
+        _, dense_reward, _, _, dense_info = dense.step(dense.tracking_action())
+        shaping = float(dense.simulator.scene.dense_reward()[0]) / spade_task.horizon
+        assert dense_reward == pytest.approx(sparse_reward + shaping, abs=1e-12)
+        assert dense_info["goal_reward"] == sparse_info["goal_reward"]  # same episode, same sand
+
+
+def test_an_unknown_reward_is_refused(spade_task):
+    with pytest.raises(ValueError, match="unknown reward 'shaped'; choose one of sparse, dense"):
+        ToolUseEnv("spade", "planar", task=spade_task, reward="shaped")

@@ -33,6 +33,7 @@ COMMANDS = (
     "toolimit.cli.learn",
     "toolimit.cli.evaluate",
     "toolimit.cli.run",
+    "toolimit.cli.reproduce",
 )
 
 

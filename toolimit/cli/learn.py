@@ -26,6 +26,7 @@ from toolimit.cli import (
 def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | None) -> None:
     """The budget and learner flags shared by ``toolimit learn`` and ``toolimit run``."""
     from toolimit.learn.ppo import PRESETS
+    from toolimit.learn.simulator import REWARDS
 
     parser.add_argument(
         "--timesteps",
@@ -72,6 +73,13 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | Non
         help="the policy's standard deviation on every joint, rad/s: fixed after cloning, the start of the "
         "learned one with --no-clone (default: 0.2, the authors')",
     )
+    parser.add_argument(
+        "--reward",
+        choices=REWARDS,
+        default="sparse",
+        help="sparse: the paper's goal reward; dense: plus the appendix's shaping, the dense-reward "
+        "baseline (default: sparse)",
+    )
     parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
     add_seed_argument(parser)
 
@@ -108,6 +116,7 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
         checkpoint_every=args.checkpoint_every,
         seed=args.seed,
         scene_kwargs=scene_kwargs,
+        reward=args.reward,
     )
 
 

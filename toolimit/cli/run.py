@@ -187,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
                 str(args.value_steps),
                 "--action-std",
                 str(args.action_std),
+                "--reward",
+                args.reward,
                 "--checkpoint-every",
                 str(args.checkpoint_every),
                 "--seed",

@@ -58,17 +58,19 @@ def collect_demonstrations(
     gamma: float = 0.999,
     seed: int = 0,
     scene_kwargs: dict[str, Any] | None = None,
+    reward: str = "sparse",
 ) -> Demonstrations:
     """Roll the tracking controller out ``rollouts`` times at once (one batched scene).
 
     Rollout 0 executes the controller's actions exactly (the authors' data); the others execute them
     plus N(0, ``action_noise``) (normalised units) and record the controller's action at each state
-    reached. ``gamma`` discounts the returns of the value warm-up.
+    reached. ``gamma`` discounts the returns of the value warm-up, which are those of ``reward``
+    (the reward PPO will learn with, :data:`toolimit.learn.simulator.REWARDS`).
     """
     if rollouts < 1 or not action_noise >= 0.0:
         raise ValueError(f"need rollouts >= 1 and action_noise >= 0, got {rollouts} and {action_noise}")
     rng = np.random.default_rng(seed)
-    simulator = TaskSimulator(task, batch_size=rollouts, scene_kwargs=scene_kwargs)
+    simulator = TaskSimulator(task, batch_size=rollouts, scene_kwargs=scene_kwargs, reward=reward)
     observation = simulator.reset(rng)
     noise_scale = np.full((rollouts, 1), action_noise)
     noise_scale[0] = 0.0
@@ -78,8 +80,8 @@ def collect_demonstrations(
         observations.append(observation)
         actions.append(action)
         executed = action + noise_scale * rng.normal(size=action.shape)
-        observation, reward, goal = simulator.step(executed)
-        rewards.append(reward)
+        observation, step_reward, goal = simulator.step(executed)
+        rewards.append(step_reward)
     returns = discounted_returns(np.array(rewards), gamma)
     return Demonstrations(
         observations=np.concatenate(np.swapaxes(np.array(observations), 0, 1)).astype(np.float32),

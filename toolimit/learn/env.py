@@ -9,7 +9,8 @@ Registered ids (:func:`register_environments`, run on ``import toolimit.learn``)
 ``toolimit/<Tool><World>-v0`` for Spade, Hammer, Scythe x 3D, Planar. Each starts from a shipped
 task (:mod:`toolimit.learn.shipped`): the Panda in 3D, the planar 3-link arm in the plane.
 Keywords: ``task=`` a :class:`LearningTask` or a task file of your own run (``toolimit learn``
-makes one), ``robot=`` another robot's shipped task, ``scene_kwargs=`` the scene's constructor.
+makes one), ``robot=`` another robot's shipped task, ``scene_kwargs=`` the scene's constructor,
+``reward="dense"`` the dense-reward baseline's reward.
 """
 
 from __future__ import annotations
@@ -80,9 +81,10 @@ class ToolUseEnv(gym.Env):
         robot: str | None = None,
         task: LearningTask | str | os.PathLike[str] | None = None,
         scene_kwargs: dict[str, Any] | None = None,
+        reward: str = "sparse",
     ):
         self.task = resolve_task(task, tool, world, robot)
-        self.simulator = TaskSimulator(self.task, batch_size=1, scene_kwargs=scene_kwargs)
+        self.simulator = TaskSimulator(self.task, batch_size=1, scene_kwargs=scene_kwargs, reward=reward)
         self.observation_space = observation_space(self.simulator)
         self.action_space = action_space(self.simulator)
 

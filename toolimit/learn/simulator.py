@@ -16,7 +16,9 @@ Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's velocity l
 Reward per step (AUTHORS_SETUP.md): (goal reward + velocity penalty) / H, where the penalty is
   -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) (rad/s, w = 0.01) on the joint velocity
   v. The authors' weight grew by 1e-4 per reset; here it is constant, so that a state earns the
-  same return whatever the number of episodes before it.
+  same return whatever the number of episodes before it. With ``reward="dense"`` (the paper's
+  dense-reward baseline) the scene's dense shaping (the appendix's, ``Scene.dense_reward``) is
+  added to the goal reward: the shaping guides, the goal reward still counts what succeeds.
 Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each; every position
   parameter of the scene + N(0, 0.01) m in x and y (one draw per batch: the scene takes one set of
   parameters for its B instances); the scene's own randomness (sand jitter, ...).
@@ -40,6 +42,8 @@ PARAM_NOISE_STD = 0.01
 #: Weight w of the velocity penalty and the fraction of the velocity limit where it starts.
 VELOCITY_PENALTY_WEIGHT = 0.01
 VELOCITY_PENALTY_START = 0.9
+#: The rewards a task can be learnt with: the paper's sparse goal reward, or it plus the dense shaping.
+REWARDS = ("sparse", "dense")
 
 
 class TaskSimulator:
@@ -49,11 +53,21 @@ class TaskSimulator:
         task: the learning task (robot, scene parameters, reference, horizon).
         batch_size: B.
         scene_kwargs: keyword arguments of the scene's constructor (e.g. fewer spheres in tests).
+        reward: one of :data:`REWARDS` (see the module docstring).
     """
 
-    def __init__(self, task: LearningTask, batch_size: int = 1, scene_kwargs: dict[str, Any] | None = None):
+    def __init__(
+        self,
+        task: LearningTask,
+        batch_size: int = 1,
+        scene_kwargs: dict[str, Any] | None = None,
+        reward: str = "sparse",
+    ):
         if int(batch_size) < 1:
             raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+        if reward not in REWARDS:
+            raise ValueError(f"unknown reward {reward!r}; choose one of {', '.join(REWARDS)}")
+        self.reward = reward
         self.task = task
         self.batch_size = int(batch_size)
         self.robot = make_robot(task.robot, tool=task.tool)
@@ -108,7 +122,8 @@ class TaskSimulator:
         self.scene.step(ToolPose(self._position, self._rotation))
         self.t += 1
         goal = np.asarray(self.scene.goal_reward(), dtype=float)
-        reward = (goal + velocity_penalty(velocity, self.robot.velocity_limit)) / self.horizon
+        shaping = np.asarray(self.scene.dense_reward(), dtype=float) if self.reward == "dense" else 0.0
+        reward = (goal + shaping + velocity_penalty(velocity, self.robot.velocity_limit)) / self.horizon
         return self.observation(), reward, goal
 
     @property

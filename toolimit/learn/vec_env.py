@@ -36,10 +36,18 @@ class BatchedTaskVecEnv(VecEnv):
         num_envs: B.
         seed: seed of the generator behind every reset (``VecEnv.seed`` replaces it).
         scene_kwargs: keyword arguments of the scene's constructor.
+        reward: ``"sparse"`` or ``"dense"`` (:data:`toolimit.learn.simulator.REWARDS`).
     """
 
-    def __init__(self, task: LearningTask, num_envs: int, seed: int = 0, scene_kwargs: dict[str, Any] | None = None):
-        self.simulator = TaskSimulator(task, batch_size=num_envs, scene_kwargs=scene_kwargs)
+    def __init__(
+        self,
+        task: LearningTask,
+        num_envs: int,
+        seed: int = 0,
+        scene_kwargs: dict[str, Any] | None = None,
+        reward: str = "sparse",
+    ):
+        self.simulator = TaskSimulator(task, batch_size=num_envs, scene_kwargs=scene_kwargs, reward=reward)
         self.task = task
         self.render_mode = None
         super().__init__(num_envs, observation_space(self.simulator), action_space(self.simulator))

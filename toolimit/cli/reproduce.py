@@ -1,0 +1,172 @@
+"""``toolimit reproduce``: the paper's results figure, every cell measured and saved, resumable.
+
+For each experiment of the preset (tool, world, robot, demonstration), ``toolimit run`` makes the
+alignment, the robot's trajectory and the cloned-then-PPO policy (OUT/<experiment>/method); the
+baselines learn from the same task with the same PPO budget, environments and seed, from a random
+policy with a learned standard deviation: on the sparse goal reward (OUT/<experiment>/sparse_ppo)
+and on the goal reward plus the appendix's dense shaping (OUT/<experiment>/dense_ppo). Each method
+is then measured on the same footing (:mod:`toolimit.experiments.cells`) and saved as
+OUT/cells/<cell>.json the moment it is known; run again, the command skips every saved cell and
+each stage resumes from its checkpoint. OUT/results.json, OUT/results.md and OUT/results_<tool>.svg
+are rewritten after every experiment.
+
+Presets: ``quick`` (the planar spade, tiny budgets: minutes, for CI and a first look) and ``full``
+(the Panda with the 3D spade on the five shipped demonstrations and the authors' real recording,
+the hammer and the scythe on one demonstration each; the default budgets of ``toolimit run``).
+``--demo`` replaces the preset's demonstrations. Exit codes: 0 done, 1 an experiment's pipeline
+found nothing (its cells are missing from the results), 2 bad input, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_output_folder
+from toolimit.experiments.cells import CellResult, Experiment
+
+#: Where ``full`` finds the authors' real spade recording: ``../shared`` beside the checkout.
+REAL_SPADE_RECORDING = Path("../shared/data/video_demos/spade_video1_aligned.npz")
+SHIPPED_DEMOS = Path("data/demos")
+#: The baselines' rewards (``toolimit learn --reward``), both learnt from a random policy.
+BASELINE_REWARDS = {"sparse_ppo": "sparse", "dense_ppo": "dense"}
+#: Seed of the evaluation episodes, added to ``--seed`` (``toolimit evaluate``'s default, unseen in training).
+EVALUATION_SEED = 1000
+
+
+@dataclass(frozen=True)
+class Preset:
+    """What ``toolimit reproduce`` runs: the experiments, flags of ``toolimit run`` and evaluation episodes."""
+
+    experiments: tuple[Experiment, ...]
+    run_flags: tuple[str, ...]
+    episodes: int
+
+
+def preset(name: str) -> Preset:
+    """The preset ``name`` (module docstring); demonstrations relative to the working folder."""
+    if name == "quick":
+        return Preset(
+            (Experiment("spade", "planar", "planar3", SHIPPED_DEMOS / "spade_03.npz"),), ("--quick",), episodes=4
+        )
+    spades = [SHIPPED_DEMOS / f"spade_{k:02d}.npz" for k in range(5)] + [REAL_SPADE_RECORDING]
+    experiments = [Experiment("spade", "3d", "panda", demo) for demo in spades]
+    experiments += [Experiment(tool, "3d", "panda", SHIPPED_DEMOS / f"{tool}_00.npz") for tool in ("hammer", "scythe")]
+    return Preset(tuple(experiments), (), episodes=20)
+
+
+PRESETS = ("quick", "full")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "reproduce",
+        help="the paper's results figure: every method on every demonstration",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument("--preset", choices=PRESETS, default="full", help="experiments and budgets (default: full)")
+    parser.add_argument(
+        "--demo",
+        type=Path,
+        action="append",
+        default=None,
+        help="a demonstration to run instead of the preset's (repeatable; the tool is read from the "
+        "file name's prefix, spade_..., hammer_..., scythe_...; world and robot are the preset's first)",
+    )
+    add_out_argument(parser, "output folder (one sub-folder per experiment, cells/, results.*)")
+    add_seed_argument(parser)
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.set_defaults(func=run)
+
+
+def _experiments(args: argparse.Namespace, chosen: Preset) -> tuple[Experiment, ...]:
+    """The preset's experiments, or those of ``--demo``; CliError names a missing file or unknown tool."""
+    if args.demo is None:
+        experiments = chosen.experiments
+    else:
+        first = chosen.experiments[0]
+        tools = ("spade", "hammer", "scythe")
+        for demo in args.demo:
+            if demo.stem.split("_")[0] not in tools:
+                raise CliError(f"--demo {demo}: the file name must start with one of {', '.join(tools)} and '_'")
+        experiments = tuple(Experiment(d.stem.split("_")[0], first.world, first.robot, d) for d in args.demo)
+    for experiment in experiments:
+        if not experiment.demo.is_file():
+            raise CliError(f"{experiment.name}: no such demonstration file: {experiment.demo}")
+    return experiments
+
+
+def run(args: argparse.Namespace) -> int:
+    from toolimit.cli import main as toolimit
+    from toolimit.experiments.report import write_results
+
+    chosen = preset(args.preset)
+    experiments = _experiments(args, chosen)
+    check_output_folder(args.out, "--out")
+    cells_dir = args.out / "cells"
+    quiet = ["--quiet"] if args.quiet else []
+    code = 0
+    for experiment in experiments:
+        code = max(code, _reproduce_experiment(experiment, chosen, args, toolimit, quiet))
+        cells = [CellResult.load(path) for path in sorted(cells_dir.glob("*.json"))]
+        written = write_results(
+            args.out, cells, {"name": args.preset, "run_flags": list(chosen.run_flags), "seed": args.seed}
+        )
+    print(f"wrote {', '.join(str(path) for path in written)}")
+    return code
+
+
+def _reproduce_experiment(
+    experiment: Experiment,
+    chosen: Preset,
+    args: argparse.Namespace,
+    toolimit: Callable[[list[str]], int],
+    quiet: list[str],
+) -> int:
+    """Run the pipeline and the baselines of one experiment and save its missing cells; an exit code."""
+    from toolimit.artifacts import save_json
+    from toolimit.experiments.cells import METHODS
+    from toolimit.experiments.measure import measure_policy, measure_tool_only, measure_trajopt
+    from toolimit.learn.task import TASK_NPZ, LearningTask
+
+    cells_dir, folder = args.out / "cells", args.out / experiment.name
+    missing = [m for m in METHODS if not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()]
+    if not missing:
+        print(f"[{experiment.name}] done earlier")
+        return 0
+    method_dir = folder / "method"
+    command = ["run", "--tool", experiment.tool, "--world", experiment.world, "--robot", experiment.robot]
+    command += ["--demo", str(experiment.demo), "--out", str(method_dir), "--seed", str(args.seed)]
+    command += [*chosen.run_flags, *quiet]
+    print(f"[{experiment.name}] toolimit {' '.join(command)}")
+    code = toolimit(command)
+    if code != 0:
+        print(f"[{experiment.name}] the pipeline stopped (exit {code}): no cells for this experiment")
+        return code
+    task = LearningTask.load(method_dir / "learning" / TASK_NPZ)
+    learned = json.loads((method_dir / "learning" / "learning.json").read_text())["config"]
+    stage_times = json.loads((method_dir / "run.json").read_text())["stage_times_s"]
+    episodes, seed = chosen.episodes, args.seed + EVALUATION_SEED
+    for method in missing:
+        if method == "tool_only":
+            cell = measure_tool_only(experiment, task, episodes, seed)
+        elif method == "trajopt":
+            cell = measure_trajopt(experiment, task, episodes, seed)
+        elif method == "final":
+            cell = measure_policy(experiment, method, method_dir / "learning", episodes, seed)
+            cell = replace(cell, wall_time_s=sum(stage_times.values()))
+        else:
+            command = ["learn", "--task", str(method_dir / "learning" / TASK_NPZ), "--out", str(folder / method)]
+            command += ["--no-clone", "--reward", BASELINE_REWARDS[method], "--timesteps", str(learned["timesteps"])]
+            command += ["--envs", str(learned["envs"]), "--preset", learned["preset"], "--seed", str(args.seed), *quiet]
+            print(f"[{experiment.name}] toolimit {' '.join(command)}")
+            code = toolimit(command)
+            if code != 0:
+                return code
+            cell = measure_policy(experiment, method, folder / method, episodes, seed)
+        save_json(cells_dir / f"{experiment.cell_key(method)}.json", cell.record())
+        print(f"[{experiment.name}] {method}: goal reward {cell.goal_reward:.1f}, success {cell.success_rate:.2f}")
+    return 0

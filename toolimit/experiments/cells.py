@@ -1,0 +1,113 @@
+"""The paper's results figure as cells: one tool, demonstration, robot and method each.
+
+The paper's evidence (its results figure) is, for each tool and video, the goal reward of:
+
+- ``tool_only``: the aligned tool motion alone in its scene (stage ii);
+- ``trajopt``: the robot's optimised trajectory, executed by the tracking controller (stage iii);
+- ``final``: the policy learnt by cloning that trajectory then PPO (stage iv, the method);
+- ``sparse_ppo``: PPO on the sparse goal reward from a random policy (baseline iv);
+- ``dense_ppo``: PPO from a random policy on the goal reward plus the appendix's dense shaping
+  (baseline v).
+
+(The kinesthetic-demonstration baseline, LfD, is not measured yet.)
+
+An :class:`Experiment` is one (tool, world, robot, demonstration): ``toolimit run`` makes its
+alignment, trajectory and policy, and the baselines learn from the same task with the same budget.
+Every cell is measured on the same footing: ``episodes`` rollouts from seeded resets, the goal
+reward at the last step (spade: spheres in the box) and the paper's success test over the episode.
+The tool alone and the trajectory are replayed for the learning task's horizon H (the trajectory is
+held at its last configuration after its end, the tool at its last pose), so that a motion whose
+sand lands after its end is judged as the policy is.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: The methods of the figure, in its order.
+METHODS = ("tool_only", "trajopt", "final", "sparse_ppo", "dense_ppo")
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One demonstration of one tool, for one robot in one world: a group of the figure."""
+
+    tool: str
+    world: str
+    robot: str
+    demo: Path
+
+    @property
+    def name(self) -> str:
+        """Folder and label, e.g. ``spade-3d-panda-spade_00``."""
+        return f"{self.tool}-{self.world}-{self.robot}-{self.demo.stem}"
+
+    def cell_key(self, method: str) -> str:
+        """The file name stem of this experiment's cell of ``method``, e.g. ``spade-3d-panda-spade_00-final``."""
+        return f"{self.name}-{method}"
+
+
+@dataclass(frozen=True)
+class CellResult:
+    """One cell: a method's goal reward and success over ``episodes`` seeded rollouts.
+
+    Attributes:
+        tool, world, robot, demo, method: what was measured (``demo`` is the file's stem).
+        goal_reward: mean goal reward at the last step (spade: spheres in the box).
+        success_rate: fraction of episodes that pass the paper's success test.
+        goal_rewards: (E,) per episode.
+        env_steps: environment steps the method learnt with (0 for tool_only and trajopt).
+        wall_time_s: seconds the method's own work took (for the final policy: the whole
+            ``toolimit run``; for the baselines: their learning).
+    """
+
+    tool: str
+    world: str
+    robot: str
+    demo: str
+    method: str
+    goal_reward: float
+    success_rate: float
+    goal_rewards: list[float]
+    env_steps: int
+    wall_time_s: float
+
+    @classmethod
+    def of(
+        cls,
+        experiment: Experiment,
+        method: str,
+        goal_rewards: np.ndarray,
+        successes: np.ndarray,
+        env_steps: int = 0,
+        wall_time_s: float = 0.0,
+    ) -> CellResult:
+        """The cell of ``experiment`` and ``method`` from per-episode goal rewards and successes (E,)."""
+        if method not in METHODS:
+            raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+        return cls(
+            tool=experiment.tool,
+            world=experiment.world,
+            robot=experiment.robot,
+            demo=experiment.demo.stem,
+            method=method,
+            goal_reward=float(np.mean(goal_rewards)),
+            success_rate=float(np.mean(successes)),
+            goal_rewards=[float(g) for g in goal_rewards],
+            env_steps=int(env_steps),
+            wall_time_s=float(wall_time_s),
+        )
+
+    def record(self) -> dict[str, Any]:
+        """JSON-ready form (the ``cells`` entries of ``results.json``)."""
+        return asdict(self)
+
+    @classmethod
+    def load(cls, path: Path) -> CellResult:
+        """A cell saved by :func:`toolimit.artifacts.save_json` of :meth:`record`."""
+        return cls(**json.loads(path.read_text()))
