@@ -54,7 +54,24 @@ def test_slow_or_high_sweep_cuts_nothing(speed, height):
     run(scene, straight_sweep(speed, height))
     np.testing.assert_array_equal(scene.goal_reward(), [0.0, 0.0])
     assert not scene.is_success().any()
-    assert np.all(scene.dense_reward() < 0.0)
+    assert np.all((scene.dense_reward() > 0.0) & (scene.dense_reward() <= 0.1))  # shaping without cuts
+
+
+def test_dense_reward_grows_as_the_blade_root_approaches_the_stalks_in_the_x_y_plane():
+    """0.1 mean exp(-5 d^2), d the x-y distance from the blade root to a stalk; the root's height is
+    ignored (the plane's normal), the reward 0 before the first step."""
+    scene = PlanarScytheScene()
+    scene.reset({"grass_position": GRASS}, np.random.default_rng(0), batch_size=2)
+    np.testing.assert_array_equal(scene.dense_reward(), [0.0, 0.0])  # no scythe yet
+    rewards = []
+    for offset in ([-1.5, 0.5, 0.3], [-0.5, 0.2, 0.6], [0.0, 0.0, 0.05]):
+        root = GRASS + np.array(offset)
+        scene.step(tool_poses(root, root + np.array([0.0, 0.0, 1.0])))
+        expected = 0.1 * np.exp(-5.0 * np.sum((scene.stalks - root[:2]) ** 2, axis=-1)).mean(axis=1)
+        np.testing.assert_allclose(scene.dense_reward(), expected, rtol=1e-12)
+        rewards.append(scene.dense_reward())
+    far, near, centre = rewards
+    assert np.all((far > 0.0) & (far < near) & (near < centre) & (centre <= 0.1))
 
 
 def test_rotating_blade_cuts_only_where_it_is_fast_enough():

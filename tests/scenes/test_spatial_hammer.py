@@ -136,15 +136,21 @@ def test_batched_instances_are_independent_and_deterministic():
         np.testing.assert_array_equal(a, b)
 
 
-def test_dense_reward_grows_as_the_hammer_approaches_and_drives():
+def test_dense_reward_is_the_closeness_of_the_head_to_the_nail_top_where_it_is_now():
+    """exp(-5 d^2), d from the head centre (tool origin) to the nail head's top centre; 0 unplaced."""
     scene = fresh()
+    assert scene.dense_reward()[0] == 0.0  # no hammer yet
     scene.step(ToolPose(NAIL + [0.0, 0.0, 0.5], FACE_DOWN))
     far = scene.dense_reward()[0]
     scene.step(ToolPose(NAIL + [0.0, 0.0, 0.1], FACE_DOWN))
     near = scene.dense_reward()[0]
-    strike(scene, 3.0)
-    driven = scene.dense_reward()[0]
-    assert far < near < driven
+    assert far == pytest.approx(np.exp(-5.0 * 0.5**2)) and near == pytest.approx(np.exp(-5.0 * 0.1**2))
+    assert 0.0 < far < near <= 1.0
+    travel = strike(scene, 3.0)
+    assert travel > 0.01
+    offset = np.array([0.1, -0.2, 0.3])  # from the driven nail's top
+    scene.step(ToolPose(np.array([*NAIL[:2], scene.nail_top[0]]) + offset, FACE_DOWN))
+    assert scene.dense_reward()[0] == pytest.approx(np.exp(-5.0 * np.sum(offset**2)))
 
 
 def test_invalid_parameters_are_rejected_with_a_reason():

@@ -91,7 +91,7 @@ def test_reset_builds_a_settled_pile_inside_the_deposit_that_stays_at_rest(freez
     local = deposit_frame(start)
     assert np.all(np.abs(local[:, :2]) < DEPOSIT_INNER / 2)
     assert np.all(local[:, 2] < 0.15)
-    assert np.all(scene.goal_reward() == 0) and np.all(scene.dense_reward() == 0)
+    assert np.all(scene.goal_reward() == 0)
     for _ in range(48):
         scene.step(FAR_AWAY)
     assert np.max(np.abs(scene.snapshot()["sphere_positions"] - start)) < 1e-4, "the pile must stay at rest"
@@ -128,9 +128,6 @@ def test_scripted_scoop_carry_tip_moves_at_least_ten_spheres_into_the_box(scoope
     offset = snap["sphere_positions"] - PARAMS["goal_position"]
     in_box = (np.abs(offset[:, :2]).max(axis=1) < GOAL_INNER / 2) & (offset[:, 2] <= 0.1)
     assert in_box.sum() == rewards[0]
-    # Dense reward of the paper's code: 0.1 per sphere in the box, - 0.01 per sphere outside.
-    assert np.all(scooped.dense_reward() <= 0.1 * rewards + 1e-12)
-    assert np.all(scooped.dense_reward() >= 0.1 * rewards - 0.01 * (200 - rewards) - 1e-12)
 
 
 def test_success_needs_ten_spheres_for_half_of_the_steps(scooped: SpatialSpadeScene) -> None:
@@ -145,15 +142,50 @@ def test_success_needs_ten_spheres_for_half_of_the_steps(scooped: SpatialSpadeSc
     assert scooped.success_tracker.successful_steps[0] >= scooped.success_tracker.steps / 2
 
 
-def test_dense_reward_counts_sand_on_the_spade_while_carried() -> None:
+def appendix_spade_reward(scene: SpatialSpadeScene, tool_position: np.ndarray | None) -> np.ndarray:
+    """(B,) the appendix's spade reward written out: mean over spheres of exp(-5 |c - g|^2), g the
+    box centre at sphere-radius height, + 0.05 exp(-5 |tip - deposit floor centre|^2) once placed."""
+    goal = PARAMS["goal_position"] + np.array([0.0, 0.0, scene.material.radius])
+    reward = np.exp(-5.0 * np.sum((scene.sphere_positions - goal) ** 2, axis=-1)).mean(axis=1)
+    if tool_position is not None:
+        reward += 0.05 * np.exp(-5.0 * np.sum((tool_position - PARAMS["sand_position"]) ** 2, axis=-1))
+    return reward
+
+
+def test_dense_reward_before_the_first_step_is_the_sand_term_alone() -> None:
     scene = SpatialSpadeScene()
-    scene.reset(PARAMS, np.random.default_rng(0))
-    motion = scripted_scoop(PARAMS)
-    for k in range(60):  # scoop and lift, part of the carry
-        scene.step(ToolPose(motion.position[k], motion.rotation[k]))
-    on_spade = scene.spheres_on_spade().sum()
-    assert on_spade >= 10
-    assert scene.dense_reward()[0] == pytest.approx(0.01 * on_spade - 0.01 * scene.spheres_outside().sum())
+    scene.reset(PARAMS, np.random.default_rng(0), batch_size=2)
+    dense = scene.dense_reward()
+    np.testing.assert_allclose(dense, appendix_spade_reward(scene, None), rtol=1e-12)
+    assert np.all((dense > 0.0) & (dense < 0.01)), "the sand is about 1.1 m from the box"
+
+
+def test_dense_reward_adds_the_tool_term_for_the_blade_tip_near_the_deposit() -> None:
+    """Instance 0's tip 0.5 m above the deposit's floor centre (term 0.05 exp(-1.25)), instance 1's
+    far away (term ~0); neither touches the sand."""
+    scene = SpatialSpadeScene()
+    scene.reset(PARAMS, np.random.default_rng(0), batch_size=2)
+    above = PARAMS["sand_position"] + np.array([0.0, 0.0, 0.5])
+    tips = np.stack([above, FAR_AWAY.position])
+    scene.step(ToolPose(tips, np.repeat(np.eye(3)[None], 2, 0)))
+    dense = scene.dense_reward()
+    np.testing.assert_allclose(dense, appendix_spade_reward(scene, tips), rtol=1e-12)
+    tool_term = dense - appendix_spade_reward(scene, None)
+    assert tool_term == pytest.approx([0.05 * np.exp(-1.25), 0.0], abs=1e-9)
+
+
+def test_dense_reward_rises_with_the_sand_moved_into_the_box(scooped: SpatialSpadeScene) -> None:
+    """The scooped instances against unscooped ones with the spade at the same pose (same tool term)."""
+    dense = scooped.dense_reward()
+    np.testing.assert_allclose(dense, appendix_spade_reward(scooped, scooped.tool_pose.position), rtol=1e-12)
+    assert np.all((dense >= 0.0) & (dense <= 1.05))
+    unscooped = SpatialSpadeScene()
+    unscooped.reset(PARAMS, np.random.default_rng(0), batch_size=2)
+    unscooped.step(scooped.tool_pose)  # placed over the box, away from the sand
+    # A sphere anywhere in the box region is within d^2 = 0.13 m^2 of g (term >= exp(-0.65) = 0.52),
+    # in the deposit at least 0.85 m from it (term <= 0.03): each one moved adds >= 0.4 / N.
+    rise = dense - unscooped.dense_reward()
+    assert np.all(rise > 0.4 * scooped.goal_reward() / scooped.n_spheres), rise
 
 
 def test_same_seed_gives_the_same_instances_and_other_seeds_differ() -> None:

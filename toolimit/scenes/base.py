@@ -35,6 +35,15 @@ SUCCESS_FRACTION = 0.5
 #: Scene parameter values: a position parameter is a (3,) world point, a uniform one a float.
 SceneParams = Mapping[str, "np.ndarray | float"]
 
+#: b (1/m^2) of the paper appendix's dense rewards ("Dense rewards (baseline v)",
+#: ../shared/reference/AUTHORS_SETUP.md): every term is exp(-0.5 b d^2) of a distance d (m), a
+#: length scale 1 / sqrt(b) of about 0.32 m.
+DENSE_REWARD_B = 10.0
+#: The appendix's weights: of the spade's tool-to-deposit term (its sand term has weight 1) and of
+#: the scythe's mean tool-to-stalk term.
+DENSE_SPADE_TOOL_WEIGHT = 0.05
+DENSE_SCYTHE_WEIGHT = 0.1
+
 
 @dataclass(frozen=True)
 class ParameterSpec:
@@ -130,7 +139,9 @@ class Scene(Protocol):
         scythe: stalks cut)."""
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) dense shaping reward of the paper's appendix, for the dense-reward baseline."""
+        """(B,) dense shaping reward of the paper's appendix, for the dense-reward baseline: sums
+        of :func:`gaussian_closeness` terms (spade in [0, 1.05], hammer [0, 1], scythe [0, 0.1]),
+        per step, not divided by the horizon (the learning environment does that)."""
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
@@ -201,6 +212,12 @@ def parameter_violation(parameters: tuple[ParameterSpec, ...], params: ScenePara
                     f"[{lows[axis]:.4g}, {highs[axis]:.4g}] m{reason}"
                 )
     return None
+
+
+def gaussian_closeness(distance_squared: np.ndarray) -> np.ndarray:
+    """exp(-0.5 b d^2) of squared distances d^2 (m^2), b = :data:`DENSE_REWARD_B`: the term of
+    every dense reward, 1 at distance 0, 0.61 at 0.32 m, 0.007 at 1 m."""
+    return np.exp(-0.5 * DENSE_REWARD_B * np.asarray(distance_squared, dtype=float))
 
 
 def require_reset(scene: Scene) -> None:

@@ -24,10 +24,11 @@ with whatever force it takes, so the nail travels as far as the hammer follows i
 it keeps after the hammer stops (the momentum it received, braked by the friction above).
 
 Rewards: goal reward 1 when less than ``planted_tolerance`` (1 mm) of the nail's travel is left.
-Dense reward (the paper's appendix shaping for the hammer, "negative distance of the hammer head
-to the nail plus nail depth"): ``-|head centre - nail head top| + travel / protrusion`` (m, and a
-fraction in [0, 1]). Success: planted at some control step whose end time, measured from the
-start of the first ``step`` after ``reset``, is at most ``success_window`` seconds (1 s, DESIGN.md).
+Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on
+x-z plane distances, m): exp(-5 |p - n|^2), with p the tool frame origin (the hammer head's centre)
+and n the nail head's top centre where the nail is now; in [0, 1], 0 before the first step (no
+hammer yet). Success: planted at some control step whose end time, measured from the start of the
+first ``step`` after ``reset``, is at most ``success_window`` seconds (1 s, DESIGN.md).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from toolimit.scenes.base import (
     SceneBase,
     SceneParams,
     check_reset,
+    gaussian_closeness,
     require_reset,
     world_position,
 )
@@ -203,13 +205,13 @@ class PlanarHammerScene(SceneBase):
         return (self.protrusion - self.travel() < self.planted_tolerance).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) -(hammer head to nail head top distance, m) + travel / protrusion."""
+        """(B,) the paper appendix's closeness of the hammer head to the nail head's top centre
+        (module docstring), in [0, 1]; 0 before the first step."""
         require_reset(self)
-        depth = self.travel() / self.protrusion
         if not self._tool.placed:
-            return depth
+            return np.zeros(self.batch_size)
         nail_top = np.stack([np.full(self.batch_size, self.nail_start[0]), self.nail_start[1] - self.travel()], -1)
-        return -np.linalg.norm(self._tool.position - nail_top, axis=-1) + depth
+        return gaussian_closeness(np.sum((self._tool.position - nail_top) ** 2, axis=-1))
 
     def is_success(self) -> np.ndarray:
         """(B,) the nail was planted within ``success_window`` s of the first step's start."""

@@ -18,10 +18,13 @@ each control step it moves at constant velocity and angular velocity and the cut
 * the blade's speed across the stalk, perpendicular to the cutting edge in the plane, is at least
   ``min_cut_speed`` (1 m/s), in either direction.
 
-Rewards: goal reward = number of stalks cut. Dense reward (the paper's appendix shaping for the
-scythe, "tool-to-grass distance plus cut count"): ``cut count - (plane distance from the blade to
-the nearest uncut stalk, m)``. Success: every stalk cut by the end of a control step ending at most
-``success_window`` seconds (1 s, DESIGN.md) after the start of the first ``step`` after ``reset``.
+Rewards: goal reward = number of stalks cut. Dense reward (the paper's appendix,
+:func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on x-y plane distances, m): 0.1 times
+the mean over all stalks (the appendix's grass patches, cut or not) of exp(-5 |p - s|^2), with p
+the tool frame origin (the blade root) and s a stalk's point (its base and any point up the stalk
+coincide in this plane); in [0, 0.1], 0 before the first step (no scythe yet). Success: every
+stalk cut by the end of a control step ending at most ``success_window`` seconds (1 s, DESIGN.md)
+after the start of the first ``step`` after ``reset``.
 """
 
 from __future__ import annotations
@@ -31,11 +34,13 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    DENSE_SCYTHE_WEIGHT,
     GoalTimer,
     ParameterSpec,
     SceneBase,
     SceneParams,
     check_reset,
+    gaussian_closeness,
     require_counts,
     require_positive,
     require_reset,
@@ -173,18 +178,13 @@ class PlanarScytheScene(SceneBase):
         return self.cut.sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) stalks cut - plane distance (m) from the blade segment to the nearest uncut stalk."""
+        """(B,) the paper appendix's closeness of the blade root to the stalks (module docstring),
+        in [0, 0.1]; 0 before the first step."""
         require_reset(self)
-        cut_count = self.goal_reward()
         if not self._tool.placed:
-            return cut_count
-        blade_length = self._tool.local_points(self._blade_points)[:, 1, 0]  # (B,) in-plane, m
-        edge = np.stack([np.cos(self._tool.angle), np.sin(self._tool.angle)], -1)
-        offset = self.stalks - self._tool.position[:, None, :]
-        along = np.clip(np.einsum("bmk,bk->bm", offset, edge), 0.0, blade_length[:, None])
-        distance = np.linalg.norm(offset - along[..., None] * edge[:, None, :], axis=-1)
-        nearest = np.where(self.cut, np.inf, distance).min(axis=1)
-        return cut_count - np.where(np.isfinite(nearest), nearest, 0.0)
+            return np.zeros(self.batch_size)
+        closeness = gaussian_closeness(np.sum((self.stalks - self._tool.position[:, None, :]) ** 2, axis=-1))
+        return DENSE_SCYTHE_WEIGHT * closeness.mean(axis=1)
 
     def is_success(self) -> np.ndarray:
         """(B,) every stalk was cut within ``success_window`` s of the first step's start."""

@@ -27,9 +27,11 @@ takes.
 
 Rewards: goal reward = number of circles inside the goal box (between its walls where the box is
 now, below their top).
-Dense reward (the paper's appendix shaping for the spade, "negative distance of the sand to the
-goal box and of the tool to the sand"): ``-(mean distance of the circles to the box centre) -
-(distance of the blade tip to the nearest circle not yet in the box)``, metres.
+Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on
+x-z plane distances, m): the mean over circles of exp(-5 |c - g|^2) + 0.05 exp(-5 |p - d|^2), with
+c a circle centre, g the goal box's centre (where the box is now) at circle-radius height (where a
+delivered circle rests on the ground), p the tool frame origin (the blade tip) and d the deposit's
+floor centre; in [0, 1.05]. Before the first step there is no spade and the tool term is 0.
 Success (DESIGN.md): at least ``success_count`` (10) circles in the box for at least half of the
 control steps since the reset.
 """
@@ -42,11 +44,13 @@ import pymunk.batch
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    DENSE_SPADE_TOOL_WEIGHT,
     ParameterSpec,
     SceneBase,
     SceneParams,
     SuccessTracker,
     check_reset,
+    gaussian_closeness,
     parameter_violation,
     require_counts,
     require_reset,
@@ -294,16 +298,16 @@ class PlanarSpadeScene(SceneBase):
         return self._in_goal_box().sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) -(mean circle distance to the box centre) - (tip distance to the nearest circle outside), m."""
+        """(B,) the paper appendix's shaping: sand close to the box, spade close to the deposit
+        (module docstring), in [0, 1.05]."""
         require_reset(self)
-        box_centre = np.stack([self._box_x, np.full(self.batch_size, 0.5 * self.goal_wall_height)], -1)
-        sand_to_box = np.linalg.norm(self._sand - box_centre[:, None, :], axis=-1).mean(axis=1)
+        goal = np.stack([self._box_x, np.full(self.batch_size, self.sand.radius)], -1)  # (B, 2) plane x-z, m
+        sand_term = gaussian_closeness(np.sum((self._sand - goal[:, None, :]) ** 2, axis=-1)).mean(axis=1)
         if not self._tool.placed:
-            return -sand_to_box
-        tip = self._tool.position[:, None, :]
-        tip_to_sand = np.linalg.norm(self._sand - tip, axis=-1)
-        tip_to_sand = np.where(self._in_goal_box(), np.inf, tip_to_sand).min(axis=1)
-        return -sand_to_box - np.where(np.isfinite(tip_to_sand), tip_to_sand, 0.0)
+            return sand_term
+        deposit = np.array([self.sand_x, 0.0])
+        tool_term = gaussian_closeness(np.sum((self._tool.position - deposit) ** 2, axis=-1))
+        return sand_term + DENSE_SPADE_TOOL_WEIGHT * tool_term
 
     def is_success(self) -> np.ndarray:
         """(B,) >= success_count circles in the box for at least half of the steps since reset."""

@@ -18,6 +18,11 @@ the wood, ``entry_deceleration`` a (m/s^2), so a strike that stops at contact wi
 the nail ``v^2 / (2 a)`` further (a = 100 m/s^2: 2 m/s -> 20 mm, 3 m/s -> 45 mm, a 0.3 m/s tap
 -> 0.45 mm). The nail stops on the board (travel range 0 .. protrusion <= guide_travel). The hammer
 is not stopped by the nail or the board (a kinematic tool), and the shank is not a collision body.
+
+Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10):
+exp(-5 |p - n|^2), with p the tool frame origin (the hammer head's centre) and n the nail head's
+top centre where the nail is now, world frame, m; in [0, 1]. Before the first step there is no
+hammer (no pose) and the reward is 0.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from toolimit.scenes.base import (
     SceneBase,
     SceneParams,
     check_reset,
+    gaussian_closeness,
     require_positive,
     require_reset,
     world_position,
@@ -246,17 +252,12 @@ class SpatialHammerScene(SceneBase):
         return (self.remaining_depth() < self.planted_tolerance).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) driven fraction of the protrusion minus the hammer head's distance to the nail (m).
-
-        The distance is from the tool-frame origin (hammer head centre) to the nail head's top
-        centre, 0 before the tool is placed. Same form as the planar hammer (bring the head to the
-        nail, reward the nail's progress); the paper's appendix coefficients are not reproduced.
-        """
-        progress = (self._start_top - self.nail_top) / self.protrusion
+        """(B,) the paper appendix's closeness of the hammer head to the nail head's top centre
+        (module docstring), in [0, 1]; 0 before the tool is placed."""
         if self._tool.position is None:
-            return progress
+            return np.zeros(self.batch_size)
         nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), self.nail_top])
-        return progress - np.linalg.norm(self._tool.position - nail_head, axis=1)
+        return gaussian_closeness(np.sum((self._tool.position - nail_head) ** 2, axis=-1))
 
     def is_success(self) -> np.ndarray:
         """(B,) planted within ``success_window`` seconds of the tool's placement."""

@@ -15,6 +15,12 @@ control step (1/24 s) is split into ``substeps``; over each, the blade end point
 the signed area between the edge and a stalk (in the x-y plane) is a quadratic in time whose roots
 in [0, 1] are the crossing instants. No sweep can pass a stalk unnoticed, whatever its speed.
 An edge exactly parallel to the stalks (a vertical blade) has no x-y extent and cuts nothing.
+
+Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10):
+0.1 times the mean over all stalks (the appendix's grass patches, cut or not) of
+exp(-5 |p - s|^2), with p the tool frame origin (the blade root) and s a stalk's point at half the
+cutting height (half of ``min(max_cut_height, stalk_height)``, the part the edge must cross),
+world frame, m; in [0, 0.1]. Before the first step there is no scythe (no pose) and it is 0.
 """
 
 from __future__ import annotations
@@ -23,17 +29,18 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    DENSE_SCYTHE_WEIGHT,
     GoalTimer,
     ParameterSpec,
     SceneBase,
     SceneParams,
     check_reset,
+    gaussian_closeness,
     require_counts,
     require_positive,
     require_reset,
     world_position,
 )
-from toolimit.scenes.spatial.shapes import segment_closest_points
 from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import SweptTool, tool_snapshot
 from toolimit.tools import ToolPose, rotation_z
@@ -241,24 +248,14 @@ class SpatialScytheScene(SceneBase):
         return self.cut.sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) stalks cut minus the distance (m) from the edge to the nearest uncut stalk.
-
-        The distance is from the edge segment to the stalk's point at half the cutting height
-        (the part of the stalk that must be crossed), 0 before the tool is placed or when every
-        stalk is cut. Same form as the planar scythe (bring the blade to the grass, reward each
-        cut); the paper's appendix coefficients are not reproduced.
-        """
-        cut_count = self.goal_reward()
-        if self._tool.position is None or self._tool.rotation is None:
-            return cut_count
-        edge = self._tool.position[:, None, :] + self.edge @ np.swapaxes(self._tool.rotation, 1, 2)  # (B, 2, 3)
-        targets = np.concatenate(
-            [self.stalks_xy, np.full(self.stalks_xy.shape[:2] + (1,), self.max_cut_height / 2)], axis=-1
-        )
-        closest, _ = segment_closest_points(targets, edge[:, None, 0], edge[:, None, 1])
-        distance = np.linalg.norm(targets - closest, axis=-1)
-        nearest = np.min(np.where(self.cut, np.inf, distance), axis=1)
-        return cut_count - np.where(np.isfinite(nearest), nearest, 0.0)
+        """(B,) the paper appendix's closeness of the blade root to the stalks at half the cutting
+        height (module docstring), in [0, 0.1]; 0 before the tool is placed."""
+        if self._tool.position is None:
+            return np.zeros(self.batch_size)
+        height = np.full(self.stalks_xy.shape[:2] + (1,), min(self.max_cut_height, self.stalk_height) / 2)
+        targets = np.concatenate([self.stalks_xy, height], axis=-1)  # (B, N, 3)
+        closeness = gaussian_closeness(np.sum((targets - self._tool.position[:, None, :]) ** 2, axis=-1))
+        return DENSE_SCYTHE_WEIGHT * closeness.mean(axis=1)
 
     def is_success(self) -> np.ndarray:
         """(B,) every stalk cut within ``success_window`` seconds of the tool's placement."""

@@ -45,12 +45,15 @@ parameters, mean final goal reward):
   at that tilt keeps its load).
 
 Rewards. The goal reward is the number of sphere centres in the goal region: within the box's
-inner square (+-0.25 m in x and y around its centre) and 0 <= z <= 0.1 m. The dense reward is the
-shaping of the paper's code (``SpadeTaskScene.get_environment_rewards``): 0.1 per sphere in the
-box, + 0.01 per sphere on the spade's blade (``on_spade_reward_weight``; the original's examples
-use 0.01), - 0.01 per sphere "outside" (neither in the box nor within 0.4 m horizontally of the
-deposit centre below 0.3 m height: ``out_of_box_sphere_reward``). Success (the paper): at least 10
-spheres in the box for at least half of the control steps so far.
+inner square (+-0.25 m in x and y around its centre) and 0 <= z <= 0.1 m. Success (the paper):
+at least 10 spheres in the box for at least half of the control steps so far.
+
+Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10):
+the mean over spheres of exp(-5 |c - g|^2) + 0.05 exp(-5 |p - d|^2), with c a sphere centre, g the
+goal box's centre at sphere-radius height (where a delivered sphere rests on its floor), p the
+tool frame origin (the blade tip) and d the deposit's floor centre (``sand_position``), world
+frame, m. Before the first step there is no spade (``tool_pose`` None) and the tool term is 0.
+Range [0, 1.05].
 
 Parameters must keep the deposit and the box apart (their ground rectangles must not overlap) and
 inside the world bound ``WORLD_HALF_SIZE`` (5 m) in x and y; both stand on the ground (the z of
@@ -66,12 +69,14 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
+    DENSE_SPADE_TOOL_WEIGHT,
     ParameterSpec,
     SceneBase,
     SceneParams,
     SuccessTracker,
     batched_pose,
     check_reset,
+    gaussian_closeness,
     parameter_violation,
     world_position,
 )
@@ -111,9 +116,6 @@ HEAP_PEN = 0.36
 MAX_SPHERES = 400
 #: Most control steps the heap drop may take to come to rest.
 HEAP_MAX_STEPS = 2400
-#: Dense reward weights and the deposit region of the paper's code (see the module docstring).
-DENSE_IN_BOX, DENSE_ON_SPADE, DENSE_OUTSIDE = 0.1, 0.01, -0.01
-DEPOSIT_REGION_RADIUS, DEPOSIT_REGION_HEIGHT = 0.4, 0.3
 #: The sand of the original scene (module docstring): 2 cm spheres that hardly roll (sphere-sphere
 #: friction 5), PhysX-averaged sphere-spade and sphere-ground friction 2.5, sphere-wall 3, speed
 #: capped at 1 m/s.
@@ -371,22 +373,15 @@ class SpatialSpadeScene(SceneBase):
         return np.sum(self.spheres_in_box(), axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) the paper code's shaping: 0.1 in box + 0.01 on spade - 0.01 outside (module docstring)."""
-        return (
-            DENSE_IN_BOX * np.sum(self.spheres_in_box(), axis=1)
-            + DENSE_ON_SPADE * np.sum(self.spheres_on_spade(), axis=1)
-            + DENSE_OUTSIDE * np.sum(self.spheres_outside(), axis=1)
-        )
-
-    def spheres_outside(self) -> np.ndarray:
-        """(B, N) bool: spheres neither in the box nor in the deposit region (within 0.4 m
-        horizontally of the deposit centre and below 0.3 m), the paper code's "outsiders"."""
-        positions = self._require_reset().positions
-        offset = positions[..., :2] - self.sand_position[:2]
-        near_deposit = (np.hypot(offset[..., 0], offset[..., 1]) < DEPOSIT_REGION_RADIUS) & (
-            positions[..., 2] < DEPOSIT_REGION_HEIGHT
-        )
-        return ~self.spheres_in_box() & ~near_deposit
+        """(B,) the paper appendix's shaping: sand close to the box, spade close to the deposit
+        (module docstring), in [0, 1.05]."""
+        world = self._require_reset()
+        goal = self.goal_position + np.array([0.0, 0.0, self.material.radius])
+        sand_term = gaussian_closeness(np.sum((world.positions - goal) ** 2, axis=-1)).mean(axis=1)
+        if world.tool_position is None:
+            return sand_term
+        tool_term = gaussian_closeness(np.sum((world.tool_position - self.sand_position) ** 2, axis=-1))
+        return sand_term + DENSE_SPADE_TOOL_WEIGHT * tool_term
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: >= 10 spheres in the box during at least half of the steps so far."""
