@@ -87,11 +87,12 @@ def _experiments(args: argparse.Namespace, chosen: Preset) -> tuple[Experiment, 
     if args.demo is None:
         experiments = chosen.experiments
     else:
+        from toolimit.tools import TOOLS
+
         first = chosen.experiments[0]
-        tools = ("spade", "hammer", "scythe")
         for demo in args.demo:
-            if demo.stem.split("_")[0] not in tools:
-                raise CliError(f"--demo {demo}: the file name must start with one of {', '.join(tools)} and '_'")
+            if demo.stem.split("_")[0] not in TOOLS:
+                raise CliError(f"--demo {demo}: the file name must start with one of {', '.join(TOOLS)} and '_'")
         experiments = tuple(Experiment(d.stem.split("_")[0], first.world, first.robot, d) for d in args.demo)
     for experiment in experiments:
         if not experiment.demo.is_file():
