@@ -38,3 +38,7 @@ class PathOutsideLimits(ToolimitError, ValueError):
 
 class SolverFailure(ToolimitError, RuntimeError):
     """A solver gave up on a problem (OSQP did not solve a tracking QP); the message gives its status."""
+
+
+class NoScriptedMotion(InputError):
+    """A scene has no hand-made solving motion (the LfD baseline's kinesthetic demonstration)."""

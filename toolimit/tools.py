@@ -126,3 +126,11 @@ def roll_of(rotation: np.ndarray) -> np.ndarray:
     rotation = np.asarray(rotation, dtype=float)
     local = np.swapaxes(swing_rotation(rotation[..., :, 2]), -1, -2) @ rotation
     return np.arctan2(local[..., 1, 0], local[..., 0, 0])
+
+
+def hold_last(poses: ToolPose, steps: int) -> ToolPose:
+    """(T + steps) poses: ``poses`` (T, ...) then their last pose held for ``steps`` more steps (a motion
+    whose effect lands after its end, e.g. sand settling in the box, judged over a longer episode)."""
+    if steps < 0:
+        raise InputError(f"steps to hold must be >= 0, got {steps}")
+    return ToolPose(*(np.concatenate([array, np.repeat(array[-1:], steps, axis=0)]) for array in poses))

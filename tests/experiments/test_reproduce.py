@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from toolimit.cli import main as toolimit
+from toolimit.errors import BaseInsideFootprint
 from toolimit.experiments.cells import METHODS, CellResult
 from toolimit.experiments.report import markdown_table
+from toolimit.learn.kinesthetic import SELECTION_JSON
+from toolimit.learn.task import TASK_NPZ, LearningTask
 
 REPO = Path(__file__).resolve().parents[2]
 EXPERIMENT = "spade-planar-planar3-spade_03"
@@ -36,6 +41,19 @@ def test_every_method_has_a_cell_with_the_figures_fields(quick_results: Path) ->
     assert by_method["tool_only"]["goal_reward"] >= 10 and by_method["trajopt"]["goal_reward"] >= 10
     assert by_method["sparse_ppo"]["goal_reward"] == 0.0
     assert by_method["final"]["env_steps"] > by_method["sparse_ppo"]["env_steps"] > 0  # cloning rollouts on top
+    assert by_method["lfd"]["env_steps"] >= 2_000  # the method's PPO budget (its episodes have their own horizon)
+
+
+def test_lfd_learns_from_a_scripted_scoop_the_robot_delivers_in_the_methods_scene(quick_results: Path) -> None:
+    folder = quick_results / EXPERIMENT / "lfd"
+    method, lfd = (LearningTask.load(folder / name / TASK_NPZ) for name in ("../method/learning", "."))
+    for name, value in method.params.items():
+        np.testing.assert_array_equal(lfd.params[name], value)
+    demonstration = json.loads((folder / SELECTION_JSON).read_text())["candidates"][0]
+    assert demonstration["alignment_reward"] >= 10 and demonstration["robot_reward"] >= 10  # tool alone, robot
+    configs = [json.loads((folder / "learning.json").read_text())["config"] for folder in (
+        quick_results / EXPERIMENT / "lfd" / "learning", quick_results / EXPERIMENT / "method" / "learning")]
+    assert configs[0] == configs[1]  # exactly the method's learning flags
 
 
 def test_the_table_and_the_figure_are_written(quick_results: Path) -> None:
@@ -61,7 +79,31 @@ def test_a_second_run_skips_saved_cells_and_a_removed_cell_comes_back_the_same(
 
 def test_markdown_marks_unmeasured_methods() -> None:
     cell = CellResult("hammer", "3d", "panda", "hammer_00", "final", 1.0, 1.0, [1.0], 10, 1.0)
-    assert markdown_table([cell]).splitlines()[-1] == "| hammer | 3d | panda | hammer_00 | - | - | 1.0 (1.00) | - | - |"
+    row = "| hammer | 3d | panda | hammer_00 | - | - | 1.0 (1.00) | - | - | - |"
+    assert markdown_table([cell]).splitlines()[-1] == row
+
+
+def test_a_robot_that_cannot_track_the_scripted_motion_leaves_the_lfd_cell_missing(
+    quick_results: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "reproduce"
+    shutil.copytree(quick_results, out)
+    (out / "cells" / f"{EXPERIMENT}-lfd.json").unlink()
+    shutil.rmtree(out / EXPERIMENT / "lfd")
+
+    def refuse(*args, **kwargs):
+        raise BaseInsideFootprint("every one of the 4 solutions puts the robot base inside a scene element")
+
+    monkeypatch.setattr("toolimit.learn.kinesthetic.kinesthetic_task", refuse)
+    monkeypatch.chdir(REPO)
+    assert toolimit(["reproduce", "--preset", "quick", "--out", str(out), "--quiet"]) == 1
+    said = [line for line in capsys.readouterr().out.splitlines() if "lfd:" in line]
+    assert said == [
+        f"[{EXPERIMENT}] lfd: no kinesthetic demonstration, no cell: every one of the 4 solutions puts the robot "
+        "base inside a scene element"
+    ]
+    cells = json.loads((out / "results.json").read_text())["cells"]
+    assert sorted(cell["method"] for cell in cells) == sorted(set(METHODS) - {"lfd"})
 
 
 def test_a_demonstration_of_an_unknown_tool_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -8,12 +8,12 @@ import pytest
 from toolimit.scenes.base import InvalidSceneParameters, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.spatial.hammer import SpatialHammerScene
+from toolimit.scenes.spatial.strike import FACE_OFFSET, face_down, face_poses, strike_descent
 from toolimit.tools import ToolPose
 
 NAIL = np.array([0.5, 0.2, 0.3])
 #: Hammer face down: tool x (striking direction) = -world z, tool z (handle) = world y.
-FACE_DOWN = np.column_stack([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-FACE_OFFSET = 0.055  # head centre to striking face, m (tool_geometry's hammer head)
+FACE_DOWN = face_down(np.array([0.0, 1.0, 0.0]))
 
 
 def strike(scene, speed, overshoot=0.002, offset=(0.0, 0.0), approach_steps=6, hold_steps=12, top=None):
@@ -24,11 +24,11 @@ def strike(scene, speed, overshoot=0.002, offset=(0.0, 0.0), approach_steps=6, h
     """
     start = scene.nail_top[0] if top is None else top
     xy = NAIL[:2] + np.asarray(offset)
-    for k in range(approach_steps + 1):
-        face = start - overshoot + (approach_steps - k) * speed * scene.control_dt
-        scene.step(ToolPose(np.array([xy[0], xy[1], face + FACE_OFFSET]), FACE_DOWN))
-    for _ in range(hold_steps):
-        scene.step(ToolPose(np.array([xy[0], xy[1], start + 0.1 + FACE_OFFSET]), FACE_DOWN))
+    descent = strike_descent(xy, start - overshoot, speed, approach_steps, scene.control_dt, FACE_DOWN)
+    away = face_poses(xy, np.full(hold_steps, start + 0.1), FACE_DOWN)
+    for poses in (descent, away):
+        for position, rotation in zip(*poses):
+            scene.step(ToolPose(position, rotation))
     return start - scene.nail_top[0]
 
 

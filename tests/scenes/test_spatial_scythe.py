@@ -8,6 +8,7 @@ import pytest
 from toolimit.scenes.base import InvalidSceneParameters, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.spatial.scythe import SpatialScytheScene, edge_crossings
+from toolimit.scenes.spatial.sweep import straight_sweep as sweep
 from toolimit.tools import ToolPose, rotation_z
 
 PATCH = np.array([1.0, -0.5, 0.0])
@@ -23,12 +24,8 @@ def fresh(batch_size=4, seed=0, yaw=0.0, **kwargs):
 
 def straight_sweep(scene, speed, height, direction=1.0):
     """Sweep the level blade across the patch along +-y at ``speed`` (m/s), ``height`` (m) up."""
-    x = PATCH[0] - scene.blade_length / 2
-    y, end = PATCH[1] - direction * 0.4, PATCH[1] + direction * 0.4
-    while direction * (end - y) > 0:
-        scene.step(ToolPose(np.array([x, y, height]), LEVEL))
-        y += direction * speed * scene.control_dt
-    scene.step(ToolPose(np.array([x, y, height]), LEVEL))
+    for position, rotation in zip(*sweep(PATCH, 0.0, speed, height, scene.control_dt, direction)):
+        scene.step(ToolPose(position, rotation))
 
 
 def arc_sweep(scene, angular_speed, height, inner_radius=0.3):

@@ -4,8 +4,11 @@ For each experiment of the preset (tool, world, robot, demonstration), ``toolimi
 alignment, the robot's trajectory and the cloned-then-PPO policy (OUT/<experiment>/method); the
 baselines learn from the same task with the same PPO budget, environments and seed, from a random
 policy with a learned standard deviation: on the sparse goal reward (OUT/<experiment>/sparse_ppo)
-and on the goal reward plus the appendix's dense shaping (OUT/<experiment>/dense_ppo). Each method
-is then measured on the same footing (:mod:`toolimit.experiments.cells`) and saved as
+and on the goal reward plus the appendix's dense shaping (OUT/<experiment>/dense_ppo). LfD, the
+kinesthetic-demonstration baseline (OUT/<experiment>/lfd), tracks the scene's scripted motion with
+the pipeline's stage iii settings in the same scene (:mod:`toolimit.learn.kinesthetic`) and learns
+from it with exactly the method's learning flags (cloning, then PPO). Each method is then measured
+on the same footing (:mod:`toolimit.experiments.cells`) and saved as
 OUT/cells/<cell>.json the moment it is known; run again, the command skips every saved cell and
 each stage resumes from its checkpoint. OUT/results.json, OUT/results.md and OUT/results_<tool>.svg
 are rewritten after every experiment.
@@ -14,7 +17,8 @@ Presets: ``quick`` (the planar spade, tiny budgets: minutes, for CI and a first 
 (the Panda with the 3D spade on the five shipped demonstrations and the authors' real recording,
 the hammer and the scythe on one demonstration each; the default budgets of ``toolimit run``).
 ``--demo`` replaces the preset's demonstrations. Exit codes: 0 done, 1 an experiment's pipeline
-found nothing (its cells are missing from the results), 2 bad input, 130 interrupted.
+found nothing or its robot cannot track the scripted motion of LfD (those cells are missing from
+the results; a line says why), 2 bad input, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -24,15 +28,21 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_output_folder
 from toolimit.experiments.cells import CellResult, Experiment
+
+if TYPE_CHECKING:
+    from toolimit.learn.task import LearningTask
 
 #: Where ``full`` finds the authors' real spade recording: ``../shared`` beside the checkout.
 REAL_SPADE_RECORDING = Path("../shared/data/video_demos/spade_video1_aligned.npz")
 SHIPPED_DEMOS = Path("data/demos")
 #: The baselines' rewards (``toolimit learn --reward``), both learnt from a random policy.
 BASELINE_REWARDS = {"sparse_ppo": "sparse", "dense_ppo": "dense"}
+#: The method's cloning flags (``toolimit learn``) that LfD learns with too, as learning.json's ``config`` keys.
+CLONING = ("clone_rollouts", "clone_noise", "clone_steps", "value_steps", "action_std")
 #: Seed of the evaluation episodes, added to ``--seed`` (``toolimit evaluate``'s default, unseen in training).
 EVALUATION_SEED = 1000
 
@@ -44,6 +54,13 @@ class Preset:
     experiments: tuple[Experiment, ...]
     run_flags: tuple[str, ...]
     episodes: int
+
+    @property
+    def starts(self) -> int:
+        """The base initialisations of stage iii under ``run_flags`` (``toolimit run --starts``)."""
+        from toolimit.cli.run import QUICK, STARTS
+
+        return int(QUICK["starts"]) if "--quick" in self.run_flags else STARTS
 
 
 def preset(name: str) -> Preset:
@@ -151,6 +168,7 @@ def _reproduce_experiment(
     learned = json.loads((method_dir / "learning" / "learning.json").read_text())["config"]
     stage_times = json.loads((method_dir / "run.json").read_text())["stage_times_s"]
     episodes, seed = chosen.episodes, args.seed + EVALUATION_SEED
+    code = 0
     for method in missing:
         if method == "tool_only":
             cell = measure_tool_only(experiment, task, episodes, seed)
@@ -160,14 +178,46 @@ def _reproduce_experiment(
             cell = measure_policy(experiment, method, method_dir / "learning", episodes, seed)
             cell = replace(cell, wall_time_s=sum(stage_times.values()))
         else:
-            command = ["learn", "--task", str(method_dir / "learning" / TASK_NPZ), "--out", str(folder / method)]
-            command += ["--no-clone", "--reward", BASELINE_REWARDS[method], "--timesteps", str(learned["timesteps"])]
-            command += ["--envs", str(learned["envs"]), "--preset", learned["preset"], "--seed", str(args.seed), *quiet]
+            if method == "lfd":
+                learning = folder / method / "learning"
+                task_file = _kinesthetic_task(experiment, task, chosen, folder / method, learned["seed"])
+                if task_file is None:
+                    code = 1
+                    continue
+                flags = ["--reward", learned["reward"], *(f"--{f.replace('_', '-')}={learned[f]}" for f in CLONING)]
+            else:
+                learning, task_file = folder / method, method_dir / "learning" / TASK_NPZ
+                flags = ["--no-clone", "--reward", BASELINE_REWARDS[method]]
+            command = ["learn", "--task", str(task_file), "--out", str(learning), *flags]
+            command += [f"--{flag}={learned[flag]}" for flag in ("timesteps", "envs", "preset", "seed")] + quiet
             print(f"[{experiment.name}] toolimit {' '.join(command)}")
-            code = toolimit(command)
-            if code != 0:
-                return code
-            cell = measure_policy(experiment, method, folder / method, episodes, seed)
+            learned_code = toolimit(command)
+            if learned_code != 0:
+                return learned_code
+            cell = measure_policy(experiment, method, learning, episodes, seed)
         save_json(cells_dir / f"{experiment.cell_key(method)}.json", cell.record())
         print(f"[{experiment.name}] {method}: goal reward {cell.goal_reward:.1f}, success {cell.success_rate:.2f}")
-    return 0
+    return code
+
+
+def _kinesthetic_task(
+    experiment: Experiment, task: LearningTask, chosen: Preset, folder: Path, seed: int
+) -> Path | None:
+    """The task file of LfD's kinesthetic demonstration in ``folder`` (made now or earlier), tracked
+    with the pipeline's stage iii settings; None after a line saying why the robot cannot track
+    the scripted motion."""
+    from toolimit.cli.run import SELECTION_TIME_SCALES, VELOCITY_WEIGHT
+    from toolimit.cli.trajopt import parse_time_scales
+    from toolimit.errors import BaseInsideFootprint, NoScriptedMotion, SolverFailure
+    from toolimit.learn.kinesthetic import kinesthetic_task
+    from toolimit.learn.task import TASK_NPZ
+    from toolimit.trajopt import TrackingWeights, TrackOptions
+
+    options = TrackOptions(weights=TrackingWeights(velocity=VELOCITY_WEIGHT), starts=chosen.starts)
+    time_scales = parse_time_scales(SELECTION_TIME_SCALES[experiment.world])
+    try:
+        kinesthetic_task(task, folder, options, time_scales, seed=seed)
+    except (BaseInsideFootprint, SolverFailure, NoScriptedMotion) as refusal:
+        print(f"[{experiment.name}] lfd: no kinesthetic demonstration, no cell: {refusal}")
+        return None
+    return folder / TASK_NPZ

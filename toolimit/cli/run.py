@@ -43,6 +43,11 @@ DEFAULT_CANDIDATES = {"planar": 5, "3d": 20}
 #: demonstration's own speed usually earns most (a slowed throw falls short of the box), slower
 #: scales help where the robot lags too much at its velocity limits.
 SELECTION_TIME_SCALES = {"planar": "1", "3d": "1,1.5,2"}
+#: Stage iii's settings in the pipeline (``toolimit trajopt --velocity-weight``, ``--starts``): w_v,
+#: the weight of the joint velocities (rad/s)^2, and the base initialisations by default; the LfD
+#: baseline of ``toolimit reproduce`` tracks its scripted motion with the same.
+VELOCITY_WEIGHT = 1e-4
+STARTS = 8
 #: Budgets of --quick: minutes on a laptop, for CI and first tries.
 QUICK = {
     "samples": 3000,
@@ -79,7 +84,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="time scales the robot's selection tries, as `toolimit trajopt --time-scale` (default: "
         f"{SELECTION_TIME_SCALES['planar']} planar, {SELECTION_TIME_SCALES['3d']} in 3D)",
     )
-    parser.add_argument("--starts", type=int, default=8, help="trajopt base initialisations (default: 8)")
+    parser.add_argument("--starts", type=int, default=STARTS, help=f"trajopt base initialisations (default: {STARTS})")
     parser.add_argument("--episodes", type=int, default=20, help="evaluation episodes (default: 20)")
     add_learning_arguments(parser, timesteps=None)
     parser.add_argument(
@@ -148,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
                 str(alignment),
                 "--select-by-robot",
                 "--velocity-weight",
-                "1e-4",
+                f"{VELOCITY_WEIGHT:g}",
                 "--time-scale",
                 time_scale,
                 "--starts",

@@ -7,12 +7,14 @@ The paper's evidence (its results figure) is, for each tool and video, the goal 
 - ``final``: the policy learnt by cloning that trajectory then PPO (stage iv, the method);
 - ``sparse_ppo``: PPO on the sparse goal reward from a random policy (baseline iv);
 - ``dense_ppo``: PPO from a random policy on the goal reward plus the appendix's dense shaping
-  (baseline v).
-
-(The kinesthetic-demonstration baseline, LfD, is not measured yet.)
+  (baseline v);
+- ``lfd``: learning from a kinesthetic demonstration, the scene's scripted motion tracked by the
+  robot in the same scene (:mod:`toolimit.learn.kinesthetic`), cloned then PPO with the method's
+  budget (the paper: comparable to the method).
 
 An :class:`Experiment` is one (tool, world, robot, demonstration): ``toolimit run`` makes its
-alignment, trajectory and policy, and the baselines learn from the same task with the same budget.
+alignment, trajectory and policy, and the baselines learn from the same task (LfD: from its own
+task in the same scene) with the same budget.
 Every cell is measured on the same footing: ``episodes`` rollouts from seeded resets, the goal
 reward at the last step (spade: spheres in the box) and the paper's success test over the episode.
 The tool alone and the trajectory are replayed for the learning task's horizon H (the trajectory is
@@ -30,7 +32,7 @@ from typing import Any
 import numpy as np
 
 #: The methods of the figure, in its order.
-METHODS = ("tool_only", "trajopt", "final", "sparse_ppo", "dense_ppo")
+METHODS = ("tool_only", "trajopt", "final", "sparse_ppo", "dense_ppo", "lfd")
 
 
 @dataclass(frozen=True)

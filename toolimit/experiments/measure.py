@@ -21,7 +21,7 @@ from toolimit.learn.task import LearningTask
 from toolimit.learn.training import LEARNING_JSON, load_policy
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.replay import replay
-from toolimit.tools import ToolPose
+from toolimit.tools import ToolPose, hold_last
 from toolimit.trajopt.selection import load_candidates
 
 
@@ -40,12 +40,10 @@ def measure_tool_only(experiment: Experiment, task: LearningTask, episodes: int,
         raise InputError(
             f"{experiment.name}: the aligned motion has {targets.fps} fps, the scene steps at {1 / task.control_dt:g}"
         )
-    hold = max(task.horizon - len(targets.positions), 0)
-    positions = np.concatenate([targets.positions, np.repeat(targets.positions[-1:], hold, axis=0)])
-    rotations = np.concatenate([targets.rotations, np.repeat(targets.rotations[-1:], hold, axis=0)])
+    poses = hold_last(ToolPose(targets.positions, targets.rotations), max(task.horizon - len(targets.positions), 0))
     scene = make_scene(task.tool, task.world)
     rng = np.random.default_rng(seed)
-    goal = replay(scene, task.params, rng, ToolPose(positions, rotations), batch_size=episodes)
+    goal = replay(scene, task.params, rng, poses, batch_size=episodes)
     return CellResult.of(experiment, "tool_only", goal, np.asarray(scene.is_success(), dtype=bool))
 
 

@@ -1,4 +1,4 @@
-"""Scenes by name: ``make_scene(tool, world)``.
+"""Scenes by name: ``make_scene(tool, world)``; their hand-made solving motions: ``scripted_motion``.
 
 Entry points are strings ("module:Class") so that choosing a planar scene never imports the 3D
 code and vice versa. Stages ask the registry; they never branch on the tool's name.
@@ -9,8 +9,9 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from toolimit.errors import InputError
-from toolimit.scenes.base import Scene
+from toolimit.errors import InputError, NoScriptedMotion
+from toolimit.scenes.base import CONTROL_FPS, Scene, SceneParams
+from toolimit.tools import ToolPose
 
 WORLDS = ("planar", "3d")
 
@@ -21,6 +22,15 @@ _ENTRY_POINTS: dict[tuple[str, str], str] = {
     ("spade", "3d"): "toolimit.scenes.spatial.spade:SpatialSpadeScene",
     ("hammer", "3d"): "toolimit.scenes.spatial.hammer:SpatialHammerScene",
     ("scythe", "3d"): "toolimit.scenes.spatial.scythe:SpatialScytheScene",
+}
+
+#: Hand-made tool motions that solve a scene for its parameters, without any video: the LfD
+#: baseline's kinesthetic demonstrations (:mod:`toolimit.learn.kinesthetic`), tests and notebooks.
+_SCRIPTED_MOTIONS: dict[tuple[str, str], str] = {
+    ("spade", "planar"): "toolimit.scenes.planar.scoop:scripted_scoop",
+    ("spade", "3d"): "toolimit.scenes.spatial.scoop:scripted_scoop",
+    ("hammer", "3d"): "toolimit.scenes.spatial.strike:scripted_strike",
+    ("scythe", "3d"): "toolimit.scenes.spatial.sweep:scripted_sweep",
 }
 
 
@@ -43,5 +53,22 @@ def make_scene(tool: str, world: str, **kwargs: Any) -> Scene:
     except KeyError:
         tools = sorted({t for t, w in _ENTRY_POINTS if w == world})
         raise InputError(f"unknown tool {tool!r} for world {world!r}; known tools: {', '.join(tools)}") from None
-    module_name, class_name = entry_point.split(":")
-    return getattr(importlib.import_module(module_name), class_name)(**kwargs)
+    return _load(entry_point)(**kwargs)
+
+
+def scripted_motion(tool: str, world: str, params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
+    """The hand-made motion of ``tool`` that solves its scene in ``world`` with ``params``: (T, 3)
+    head positions (m) and (T, 3, 3) rotations, world frame, at ``fps``; InputError for a scene
+    without one."""
+    try:
+        entry_point = _SCRIPTED_MOTIONS[(tool, world)]
+    except KeyError:
+        known = ", ".join(f"{t}/{w}" for t, w in sorted(_SCRIPTED_MOTIONS))
+        raise NoScriptedMotion(f"no scripted motion for the {tool} in world {world!r}; scripted: {known}") from None
+    return _load(entry_point)(params, fps)
+
+
+def _load(entry_point: str) -> Any:
+    """The object named by ``"module:name"``, its module imported only now."""
+    module_name, name = entry_point.split(":")
+    return getattr(importlib.import_module(module_name), name)

@@ -45,6 +45,9 @@ from toolimit.scenes.spatial.tool_geometry import tool_boxes
 from toolimit.scenes.spatial.tool_motion import SweptTool, tool_snapshot
 from toolimit.tools import ToolPose
 
+#: Height of the nail head plate's underside above the board at reset, m: the nail's travel (default).
+PROTRUSION = 0.05
+
 
 def box_surface_points(half_extents: np.ndarray, per_edge: int = 5) -> np.ndarray:
     """(P, 3) points on the surface of a box centred at 0 with ``half_extents`` (3,), metres.
@@ -91,7 +94,7 @@ class SpatialHammerScene(SceneBase):
 
     def __init__(
         self,
-        protrusion: float = 0.05,
+        protrusion: float = PROTRUSION,
         guide_travel: float = 0.10,
         plate_half_size: float = 0.03,
         plate_thickness: float = 0.01,

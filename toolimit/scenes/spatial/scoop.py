@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from toolimit.scenes.base import CONTROL_FPS, SceneParams
+from toolimit.scenes.spade_keyframes import spade_keyframe_motion
 from toolimit.scenes.spatial.tool_geometry import SPADE_BLADE_LENGTH
 from toolimit.tools import ToolPose, rotation_z
 
@@ -38,12 +39,4 @@ def scripted_scoop(params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
         (3.5, goal - blade_middle * heading + 0.20 * up, 80 * deg),
         (4.5, goal - blade_middle * heading + 0.20 * up, 80 * deg),
     ]
-    key_times = np.array([k[0] for k in keyframes])
-    key_heads = np.array([k[1] for k in keyframes])
-    times = np.arange(0.0, key_times[-1] + 1e-9, 1.0 / fps)
-    heads = np.stack([np.interp(times, key_times, key_heads[:, a]) for a in range(3)], axis=-1)
-    elevation = np.interp(times, key_times, [k[2] for k in keyframes])
-    axis = np.cos(elevation)[:, None] * heading + np.sin(elevation)[:, None] * up  # tool z
-    face = -np.sin(elevation)[:, None] * heading + np.cos(elevation)[:, None] * up  # tool x, face normal
-    rotations = np.stack([face, np.cross(axis, face), axis], axis=-1)
-    return ToolPose(heads, rotations)
+    return spade_keyframe_motion(keyframes, heading, fps)

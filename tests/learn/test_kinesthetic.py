@@ -1,0 +1,68 @@
+"""The LfD baseline's kinesthetic demonstration: the scripted scoop tracked by the planar arm."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from toolimit.errors import BaseInsideFootprint
+from toolimit.learn import LearningTask
+from toolimit.learn.kinesthetic import SELECTION_JSON, kinesthetic_task
+from toolimit.learn.task import TASK_NPZ
+from toolimit.trajopt import TrackingWeights, TrackOptions
+from toolimit.trajopt.result import TRAJECTORY_JSON, TRAJECTORY_NPZ
+
+OPTIONS = TrackOptions(weights=TrackingWeights(velocity=1e-4), starts=2)
+
+
+@pytest.fixture(scope="module")
+def demonstration(spade_task: LearningTask, tmp_path_factory: pytest.TempPathFactory) -> tuple[LearningTask, Path]:
+    folder = tmp_path_factory.mktemp("lfd")
+    return kinesthetic_task(spade_task, folder, OPTIONS, (1.0,), seed=0, replays=4), folder
+
+
+def test_the_task_is_the_robots_in_the_same_scene(spade_task: LearningTask, demonstration) -> None:
+    lfd, folder = demonstration
+    assert (lfd.tool, lfd.world, lfd.robot, lfd.joint_names) == (
+        spade_task.tool,
+        spade_task.world,
+        spade_task.robot,
+        spade_task.joint_names,
+    )
+    assert lfd.params.keys() == spade_task.params.keys()
+    for name, value in spade_task.params.items():
+        np.testing.assert_array_equal(lfd.params[name], value)
+    assert lfd.reference_steps <= lfd.horizon <= 2 * lfd.reference_steps
+    assert lfd.source["kinesthetic"] == str(folder)
+    assert {path.name for path in folder.iterdir()} == {TRAJECTORY_NPZ, TRAJECTORY_JSON, SELECTION_JSON, TASK_NPZ}
+
+
+def test_the_scripted_scoop_and_the_robots_replay_deliver(demonstration) -> None:
+    _, folder = demonstration
+    record = json.loads((folder / SELECTION_JSON).read_text())["candidates"][0]
+    assert record["alignment_reward"] >= 10, "the scripted scoop alone fills the box"
+    assert record["robot_reward"] >= 10, "the robot tracking it too"
+
+
+def test_a_finished_demonstration_is_read_back_not_redone(spade_task: LearningTask, demonstration) -> None:
+    lfd, folder = demonstration
+    stamp = (folder / TASK_NPZ).stat().st_mtime_ns
+    again = kinesthetic_task(spade_task, folder, OPTIONS, (1.0,), seed=0, replays=4)
+    assert (folder / TASK_NPZ).stat().st_mtime_ns == stamp
+    np.testing.assert_array_equal(again.reference_q, lfd.reference_q)
+
+
+def test_a_robot_that_cannot_stand_anywhere_is_refused(
+    spade_task: LearningTask, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Every base the solver finds inside a scene element: BaseInsideFootprint, nothing written."""
+    from toolimit.scenes.planar.spade import PlanarSpadeScene
+
+    everywhere = np.array([[0.0, 0.0, 100.0, 100.0, 0.0]])
+    monkeypatch.setattr(PlanarSpadeScene, "footprints", lambda self, params: everywhere)
+    with pytest.raises(BaseInsideFootprint, match="cannot track the scripted spade motion"):
+        kinesthetic_task(spade_task, tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=1)
+    assert not (tmp_path / "lfd").exists()

@@ -1,0 +1,86 @@
+"""The LfD baseline's kinesthetic demonstration: a scripted tool motion tracked by the robot.
+
+The paper compares its method with learning from a kinesthetic demonstration: a joint trajectory
+that solves the task in the robot's own scene without the video (a person guiding the arm), cloned
+then fine-tuned by PPO. Here the scene is the method's learning task's (the scene parameters of
+its selected alignment candidate), the motion is the scene's hand-made one
+(:func:`toolimit.scenes.registry.scripted_motion`: a scoop, a strike, a sweep) and the robot follows
+it with stage iii: :func:`toolimit.trajopt.selection.select_by_robot_execution` with the scripted
+motion as its only candidate, i.e. the same tracking, base placement outside the scene's elements,
+time-scale choice by robot replay and replays as the pipeline's. The result is a
+:class:`~toolimit.learn.task.LearningTask` in the same scene, learnt from exactly as the method's;
+its ``source`` names the demonstration's folder (``kinesthetic``) and, prefixed ``scene_``, where
+the scene parameters came from (the method task's own ``source``).
+
+A demonstration folder holds ``trajectory.npz`` / ``trajectory.json`` (stage iii's format),
+``selection.json`` (the scripted motion's tool-only reward, the robot's replay reward per time
+scale) and ``task.npz``, written last: a folder with it is finished and is read back, not redone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from toolimit.artifacts import save_json
+from toolimit.errors import BaseInsideFootprint
+from toolimit.learn.task import TASK_NPZ, LearningTask, task_from_trajectory
+from toolimit.robots import make_robot
+from toolimit.scenes.registry import make_scene, scripted_motion
+from toolimit.scenes.replay import replay
+from toolimit.trajopt.problem import PoseTargets
+from toolimit.trajopt.selection import AlignedCandidate, select_by_robot_execution
+from toolimit.trajopt.track import TrackOptions
+
+SELECTION_JSON = "selection.json"
+
+
+def kinesthetic_task(
+    task: LearningTask,
+    folder: Path,
+    options: TrackOptions,
+    time_scales: tuple[float, ...],
+    seed: int = 0,
+    replays: int = 10,
+) -> LearningTask:
+    """The LfD task for ``task``'s robot, tool and scene parameters, saved in ``folder`` (module
+    docstring), or read from there when finished earlier.
+
+    ``options`` (weights, starts) and ``time_scales`` are stage iii's; ``seed`` seeds the replays,
+    the tracking's random starts and the horizon's replay. Raises BaseInsideFootprint when every
+    solution puts the robot's base inside a scene element, SolverFailure when OSQP gives up,
+    NoScriptedMotion for a scene without a hand-made motion.
+    """
+    if (folder / TASK_NPZ).is_file():
+        return LearningTask.load(folder / TASK_NPZ)
+    scene = make_scene(task.tool, task.world)
+    motion = scripted_motion(task.tool, task.world, task.params, fps=1.0 / scene.control_dt)
+    tool_rewards = replay(scene, task.params, np.random.default_rng(seed), motion, batch_size=replays)
+    candidate = AlignedCandidate(
+        PoseTargets(motion.position, motion.rotation, 1.0 / scene.control_dt), task.params, float(tool_rewards.mean())
+    )
+    robot = make_robot(task.robot, tool=task.tool)
+    selection = select_by_robot_execution(
+        robot,
+        [candidate],
+        task.tool,
+        task.world,
+        replace(options, progress=False),
+        seed=seed,
+        replays=replays,
+        progress=False,
+        time_scales=time_scales,
+    )
+    trajectory = selection.trajectories[0]
+    if trajectory is None:
+        raise BaseInsideFootprint(
+            f"the {task.robot} cannot track the scripted {task.tool} motion: {selection.refusals[0]}"
+        )
+    trajectory.save(folder)
+    save_json(folder / SELECTION_JSON, selection.record([candidate]))
+    source = {"kinesthetic": str(folder)} | {f"scene_{key}": value for key, value in task.source.items()}
+    lfd_task = task_from_trajectory(trajectory, task.world, task.params, robot, scene, seed, source)
+    lfd_task.save(folder / TASK_NPZ)
+    return lfd_task
