@@ -135,6 +135,7 @@ def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, m
     assert len(tests) == 2  # before updates 2 and 3
     # x grows away from the deposit only: 0.05 m towards it, the box would stand on it
     assert whole.record["adr"]["range_m"][0] == pytest.approx(DELTA * sum(t["side"] == "low" for t in tests))
+    assert whole.record["adr"]["range_m"][0] > 0, "seed 0 pushes once, so the environment is reset mid-run"
     curves = [[json.loads(line) for line in (tmp_path / name / CURVE_JSONL).read_text().splitlines()]
               for name in ("whole", "split")]
     assert curves[0] == [c | {"approx_kl": curves[0][k]["approx_kl"]} for k, c in enumerate(curves[1])]
