@@ -26,6 +26,20 @@ def test_learn_from_a_registered_id_then_evaluate(tmp_path, capsys):
     assert record["episodes"] == 2 and {"success_rate", "goal_reward_mean", "stochastic"} <= set(record)
 
 
+def test_learn_with_adr_then_a_heat_map(tmp_path, capsys):
+    out = tmp_path / "learned"
+    assert main(["learn", "--env", "toolimit/SpadePlanar-v0", "--adr", "--out", str(out), *TINY]) == 0
+    assert "adr" in json.loads((out / "learning.json").read_text())
+    svg, rrd = tmp_path / "map.svg", tmp_path / "map.rrd"
+    assert main(["evaluate", "--policy", str(out), "--episodes", "2", "--heat-map", str(svg), "--grid", "3",
+                 "--rerun", str(rrd)]) == 0
+    assert svg.read_text().count('class="cell"') == 3 and rrd.is_file()
+    record = json.loads((out / "evaluation.json").read_text())
+    assert len(record["heat_map"]["goal_rewards"][0]) == 3 and record["heat_map"]["observes_box"]
+    assert main(["evaluate", "--policy", str(out), "--heat-map", str(tmp_path / "map.png")]) == 2
+    assert "--heat-map: expected a .svg file name" in _error_line(capsys)
+
+
 @pytest.mark.parametrize(("argv", "message"), [
     (["learn", "--env", "toolimit/Shovel3D-v0"], "--env: unknown id 'toolimit/Shovel3D-v0'"),
     (["learn", "--task", "absent.npz"], "absent.npz: no such task file"),
@@ -35,6 +49,8 @@ def test_learn_from_a_registered_id_then_evaluate(tmp_path, capsys):
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--action-std", "0"], "--action-std: must be a finite number > 0"),
     (["evaluate", "--policy", "absent"], "--policy: no such folder"),
+    (["learn", "--env", "toolimit/HammerPlanar-v0", "--adr"], "the hammer scene has none (only the spades)"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--adr-every", "0"], "--adr-every: must be an integer >= 1"),
     (["run", "--tool", "spade", "--robot", "panda", "--demo", "absent.npz", "--time-scale", "slow"],
      "--time-scale: expected positive numbers"),
 ])

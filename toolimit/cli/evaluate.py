@@ -3,7 +3,15 @@
 Reads POLICY/policy.zip and POLICY/task.npz (``toolimit learn``'s folder). Writes ``--out``
 (default POLICY/evaluation.json): deterministic and stochastic rollouts, each with
 ``success_rate`` (the paper's criterion), ``goal_reward_mean``, ``goal_reward`` per episode and
-``episodes``. Exit codes: 0 done, 2 bad input.
+``episodes``. A policy learned with ``--adr`` is evaluated with the goal box at the aligned position.
+
+``--heat-map OUT.svg`` (spades) also rolls the policy out deterministically with the goal box at
+each of ``--grid`` x ``--grid`` positions over 1.5 times the ADR range (100 x 90 cm around the
+aligned position; one row in the planar world, whose box has no y) and writes the spheres
+delivered per position as an SVG picture with the robot's reach drawn
+(:mod:`toolimit.learn.heat_map`, :mod:`toolimit.viz.svg_heat_map`); its values go into the report
+under ``heat_map``, and ``--rerun OUT.rrd`` logs the map to a rerun recording. Exit codes: 0 done,
+2 bad input.
 """
 
 from __future__ import annotations
@@ -12,7 +20,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, add_seed_argument, check_writable_folder
+from toolimit.cli import CliError, add_seed_argument, check_output_file, check_writable_folder
 
 if TYPE_CHECKING:
     from toolimit.learn.evaluate import Evaluation
@@ -29,6 +37,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--episodes", type=int, default=20, help="episodes per mode (default: 20)")
     add_seed_argument(parser, "seed of the evaluation episodes", default=1000)
     parser.add_argument("--out", type=Path, default=None, help="JSON report (default: POLICY/evaluation.json)")
+    parser.add_argument(
+        "--heat-map", type=Path, default=None, help="also write the goal-box heat map to this .svg (spades)"
+    )
+    parser.add_argument("--grid", type=int, default=9, help="with --heat-map: box positions per axis (default: 9)")
+    parser.add_argument("--rerun", type=Path, default=None, help="with --heat-map: also log it to this .rrd")
     parser.set_defaults(func=run)
 
 
@@ -61,10 +74,36 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--policy: no such folder: {args.policy}")
     out = args.out or args.policy / EVALUATION_JSON
     check_writable_folder(out.parent, "--out")
-    record, _, _ = evaluation_record(args.policy, args.episodes, args.seed)
+    if args.heat_map is None and args.rerun is not None:
+        raise CliError("--rerun: needs --heat-map OUT.svg")
+    check_output_file(args.heat_map, "--heat-map", ".svg")
+    check_output_file(args.rerun, "--rerun", ".rrd")
+    if args.grid < 2:
+        raise CliError(f"--grid: must be an integer >= 2, got {args.grid}")
+    record, _, task = evaluation_record(args.policy, args.episodes, args.seed)
+    if args.heat_map is not None:
+        record["heat_map"] = _heat_map(args, task)
     save_json(out, record)
     print(
         f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "
         f"(stochastic) over {args.episodes} episodes; goal reward {record['goal_reward_mean']:.1f}; wrote {out}"
     )
     return 0
+
+
+def _heat_map(args: argparse.Namespace, task: LearningTask) -> dict:
+    """Compute the heat map of ``args.policy``, write its SVG (and rerun recording); its record."""
+    from toolimit.artifacts import save_text
+    from toolimit.learn.heat_map import goal_box_heat_map
+    from toolimit.learn.training import load_policy
+    from toolimit.viz.rerun_heat_map import save_heat_map_recording
+    from toolimit.viz.svg_heat_map import heat_map_svg
+
+    model, _ = load_policy(args.policy)
+    heat_map = goal_box_heat_map(model, task, grid=args.grid, seed=args.seed)
+    kind = "learned with ADR" if heat_map.observes_box else "learned without ADR (the box is not observed)"
+    save_text(args.heat_map, heat_map_svg(heat_map, f"{task.robot} {task.tool} ({task.world}), policy {kind}"))
+    if args.rerun is not None:
+        save_heat_map_recording(heat_map, args.rerun)
+    print(f"heat map over {heat_map.goal_rewards.size} box positions: wrote {args.heat_map}")
+    return heat_map.record()

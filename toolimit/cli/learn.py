@@ -25,6 +25,7 @@ from toolimit.cli import (
 
 def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | None) -> None:
     """The budget and learner flags shared by ``toolimit learn`` and ``toolimit run``."""
+    from toolimit.learn.adr import EVERY as ADR_EVERY
     from toolimit.learn.ppo import PRESETS
     from toolimit.learn.simulator import REWARDS
 
@@ -80,6 +81,18 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | Non
         help="sparse: the paper's goal reward; dense: plus the appendix's shaping, the dense-reward "
         "baseline (default: sparse)",
     )
+    parser.add_argument(
+        "--adr",
+        action="store_true",
+        help="domain randomisation of the goal box (spades): the box drawn per episode inside bounds grown from "
+        "the aligned position by the authors' boundary test, and observed by the policy",
+    )
+    parser.add_argument(
+        "--adr-every",
+        type=int,
+        default=ADR_EVERY,
+        help=f"with --adr: PPO updates between two boundary tests (default: {ADR_EVERY})",
+    )
     parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
     add_seed_argument(parser)
 
@@ -95,6 +108,7 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
         ("--clone-steps", args.clone_steps, 0),
         ("--value-steps", args.value_steps, 0),
         ("--checkpoint-every", args.checkpoint_every, 1),
+        ("--adr-every", args.adr_every, 1),
         ("--seed", args.seed, 0),
     ):
         if value < low:
@@ -117,6 +131,8 @@ def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
         seed=args.seed,
         scene_kwargs=scene_kwargs,
         reward=args.reward,
+        adr=args.adr,
+        adr_every=args.adr_every,
     )
 
 
@@ -154,6 +170,15 @@ def load_task(args: argparse.Namespace):
     return shipped_task(*ids[args.env], robot=args.robot)
 
 
+def check_adr(adr: bool, tool: str, world: str) -> None:
+    """With --adr, InputError (one line) unless the tool's scene has a goal box to move."""
+    if adr:
+        from toolimit.learn.adr import goal_box_spec
+        from toolimit.scenes.registry import make_scene
+
+        goal_box_spec(make_scene(tool, world))
+
+
 def run(args: argparse.Namespace) -> int:
     from toolimit.learn.ppo import CHECKPOINT_STATE
     from toolimit.learn.training import CURVE_JSONL, learn_policy
@@ -164,6 +189,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     check_output_file(args.rerun, "--rerun", ".rrd")
     task = load_task(args)
+    check_adr(args.adr, task.tool, task.world)
     try:
         outcome = learn_policy(task, args.out, config, progress=not args.quiet)
     except KeyboardInterrupt as stop:  # interrupts.Interrupted (SIGINT, SIGTERM) or a plain Ctrl-C

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, add_out_argument, add_tool_argument, add_world_argument, check_output_folder
-from toolimit.cli.learn import add_learning_arguments, learning_config
+from toolimit.cli.learn import add_learning_arguments, check_adr, learning_config
 from toolimit.cli.trajopt import parse_time_scales
 
 if TYPE_CHECKING:
@@ -110,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
     if args.candidates is None:
         args.candidates = DEFAULT_CANDIDATES[args.world]
     learning_config(args)  # checks the learning flags before any work
+    check_adr(args.adr, args.tool, args.world)
     time_scale = args.time_scale or SELECTION_TIME_SCALES[args.world]
     parse_time_scales(time_scale)
     if not args.demo.is_file():
@@ -198,7 +199,10 @@ def run(args: argparse.Namespace) -> int:
                 str(args.checkpoint_every),
                 "--seed",
                 str(args.seed),
+                "--adr-every",
+                str(args.adr_every),
                 *(["--no-clone"] if args.no_clone else []),
+                *(["--adr"] if args.adr else []),
                 *quiet,
             ],
         ),

@@ -4,6 +4,8 @@
 (:mod:`.env`). A :class:`LearningTask` (:mod:`.task`) holds what stages ii and iii hand over: the
 scene parameters, the robot's base and reference joint trajectory, and the episode horizon.
 :class:`BatchedTaskVecEnv` (:mod:`.vec_env`) steps B instances in one batched scene for SB3.
+Domain randomisation of the goal box: :mod:`.adr`; where a policy succeeds as the box moves:
+:mod:`.heat_map`.
 """
 
 from toolimit.learn.env import ToolUseEnv, env_id, register_environments

@@ -59,18 +59,20 @@ def collect_demonstrations(
     seed: int = 0,
     scene_kwargs: dict[str, Any] | None = None,
     reward: str = "sparse",
+    adr: bool = False,
 ) -> Demonstrations:
     """Roll the tracking controller out ``rollouts`` times at once (one batched scene).
 
     Rollout 0 executes the controller's actions exactly (the authors' data); the others execute them
     plus N(0, ``action_noise``) (normalised units) and record the controller's action at each state
     reached. ``gamma`` discounts the returns of the value warm-up, which are those of ``reward``
-    (the reward PPO will learn with, :data:`toolimit.learn.simulator.REWARDS`).
+    (the reward PPO will learn with, :data:`toolimit.learn.simulator.REWARDS`). ``adr``: the
+    observations hold the goal box position, which stays at the aligned one (the ADR bounds' start).
     """
     if rollouts < 1 or not action_noise >= 0.0:
         raise ValueError(f"need rollouts >= 1 and action_noise >= 0, got {rollouts} and {action_noise}")
     rng = np.random.default_rng(seed)
-    simulator = TaskSimulator(task, batch_size=rollouts, scene_kwargs=scene_kwargs, reward=reward)
+    simulator = TaskSimulator(task, batch_size=rollouts, scene_kwargs=scene_kwargs, reward=reward, adr=adr)
     observation = simulator.reset(rng)
     noise_scale = np.full((rollouts, 1), action_noise)
     noise_scale[0] = 0.0

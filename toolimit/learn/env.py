@@ -10,7 +10,9 @@ Registered ids (:func:`register_environments`, run on ``import toolimit.learn``)
 task (:mod:`toolimit.learn.shipped`): the Panda in 3D, the planar 3-link arm in the plane.
 Keywords: ``task=`` a :class:`LearningTask` or a task file of your own run (``toolimit learn``
 makes one), ``robot=`` another robot's shipped task, ``scene_kwargs=`` the scene's constructor,
-``reward="dense"`` the dense-reward baseline's reward.
+``reward="dense"`` the dense-reward baseline's reward, ``adr=True`` the goal box drawn at every
+reset inside the ADR bounds and observed (spades; :mod:`toolimit.learn.adr`; the bounds stay at the
+aligned position unless something moves them, as ``toolimit learn --adr`` does).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
+from toolimit.scenes.base import WORLD_HALF_SIZE
 
 #: (tool, world) of every registered id, and the id's spelling of the world.
 ENV_WORLDS = {"3d": "3D", "planar": "Planar"}
@@ -40,10 +43,12 @@ TOOL_POSITION_BOUND = 10.0
 
 def observation_space(simulator: TaskSimulator) -> gym.spaces.Box:
     """float32 box: tool position within +-TOOL_POSITION_BOUND m, quaternion in [-1, 1], joints
-    within their limits (rad), time fraction in [0, 1]."""
+    within their limits (rad), time fraction in [0, 1] (, goal box x, y within the world's
+    +-WORLD_HALF_SIZE m under ADR)."""
     robot = simulator.robot
-    low = np.concatenate([np.full(3, -TOOL_POSITION_BOUND), -np.ones(4), robot.lower, [0.0]])
-    high = np.concatenate([np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [1.0]])
+    box = np.full(2 * simulator.adr, WORLD_HALF_SIZE)
+    low = np.concatenate([np.full(3, -TOOL_POSITION_BOUND), -np.ones(4), robot.lower, [0.0], -box])
+    high = np.concatenate([np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [1.0], box])
     return gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
 
@@ -82,9 +87,10 @@ class ToolUseEnv(gym.Env):
         task: LearningTask | str | os.PathLike[str] | None = None,
         scene_kwargs: dict[str, Any] | None = None,
         reward: str = "sparse",
+        adr: bool = False,
     ):
         self.task = resolve_task(task, tool, world, robot)
-        self.simulator = TaskSimulator(self.task, batch_size=1, scene_kwargs=scene_kwargs, reward=reward)
+        self.simulator = TaskSimulator(self.task, batch_size=1, scene_kwargs=scene_kwargs, reward=reward, adr=adr)
         self.observation_space = observation_space(self.simulator)
         self.action_space = action_space(self.simulator)
 

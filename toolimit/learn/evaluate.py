@@ -1,7 +1,9 @@
 """Evaluation of a policy: rollouts over many seeds, goal reward and the paper's success rate.
 
 Deterministic rollouts act with the policy's mean; stochastic ones sample its Gaussian (how PPO
-explores). All episodes of one evaluation run at once in one batched scene.
+explores). All episodes of one evaluation run at once in one batched scene. A policy learned with
+ADR (its observation holds the goal box, :mod:`toolimit.learn.adr`) is evaluated with the box at
+the aligned position; :mod:`toolimit.learn.heat_map` moves it over a grid.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.artifacts import save_npz
+from toolimit.learn.simulator import observation_size
 from toolimit.learn.task import LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 from toolimit.trajopt.result import TRAJECTORY_NPZ
@@ -58,7 +61,7 @@ def evaluate(
     scene_kwargs: dict[str, Any] | None = None,
 ) -> Evaluation:
     """Roll ``model``'s policy out for ``episodes`` episodes of ``task`` (one batch, seeded)."""
-    env = BatchedTaskVecEnv(task, episodes, seed=seed, scene_kwargs=scene_kwargs)
+    env = BatchedTaskVecEnv(task, episodes, seed=seed, scene_kwargs=scene_kwargs, adr=observes_goal_box(model, task))
     observation = env.reset()
     joints = [env.simulator.q.copy()]
     returns = np.zeros(episodes)
@@ -78,6 +81,12 @@ def evaluate(
         returns,
         np.stack(joints, axis=1),
     )
+
+
+def observes_goal_box(model: BaseAlgorithm, task: LearningTask) -> bool:
+    """Whether ``model``'s observations hold the goal box position (it was learned with ADR)."""
+    assert model.observation_space is not None and model.observation_space.shape is not None
+    return model.observation_space.shape == (observation_size(len(task.joint_names), adr=True),)
 
 
 def save_rollout_trajectory(joint_positions: np.ndarray, task: LearningTask, directory: str | Path) -> Path:

@@ -152,7 +152,8 @@ class _Checkpoints(BaseCallback):
 
 def save_checkpoint(model: PPO, directory: Path) -> None:
     """Write ``checkpoint.zip`` (SB3: parameters, optimiser) and ``checkpoint.json`` (steps done,
-    the environment's generator state before its last reset, torch's random state) atomically."""
+    the environment's generator state before its last reset, torch's random state, the ADR state)
+    atomically."""
     env: BatchedTaskVecEnv = model.get_env()  # type: ignore[assignment]
     state = {
         "num_timesteps": int(model.num_timesteps),
@@ -161,6 +162,8 @@ def save_checkpoint(model: PPO, directory: Path) -> None:
         "numpy_rng": _numpy_global_state(),
         "learn_std": bool(model.policy.log_std.requires_grad),
     }
+    if env.adr is not None:
+        state["adr"] = env.adr.state_dict()
     with atomic_path(directory / CHECKPOINT_ZIP) as tmp:
         model.save(tmp)
     save_json(directory / CHECKPOINT_STATE, state)
@@ -176,6 +179,8 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
     model.num_timesteps = int(state["num_timesteps"])
     model.policy.log_std.requires_grad_(bool(state["learn_std"]))
     env.restore_rng_state(state["env_rng"])
+    if env.adr is not None:
+        env.adr.load_state_dict(state["adr"])
     torch.set_rng_state(torch.tensor(state["torch_rng"], dtype=torch.uint8))
     name, keys, position, has_gauss, gauss = state["numpy_rng"]
     np.random.set_state((name, np.array(keys, dtype=np.uint32), position, has_gauss, gauss))

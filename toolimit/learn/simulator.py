@@ -11,6 +11,9 @@ Observation (float32, per instance), the paper's state:
   continuous along the episode), joint positions (N, rad), time (1): elapsed fraction t / H of the
   episode. The authors observed the time in seconds; the fraction keeps every entry of order one
   (SB3 recommends normalised observations) and carries the same information for a fixed H.
+  With ``adr=True`` (domain randomisation of the goal box, :mod:`toolimit.learn.adr`; spades only)
+  two more entries follow: the goal box's position x, y (m, world frame) in this instance, so D =
+  3 + 4 + N + 1 + 2.
 Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's velocity limit (SB3 clips
   actions to a symmetric normalised space).
 Reward per step (AUTHORS_SETUP.md): (goal reward + velocity penalty) / H, where the penalty is
@@ -22,15 +25,23 @@ Reward per step (AUTHORS_SETUP.md): (goal reward + velocity penalty) / H, where 
 Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each; every position
   parameter of the scene + N(0, 0.01) m in x and y (one draw per batch: the scene takes one set of
   parameters for its B instances); the scene's own randomness (sand jitter, ...).
+Goal box (spades): under ADR each instance's box is drawn inside the current ADR bounds
+  (:meth:`AdrBounds.draw <toolimit.learn.adr.AdrBounds.draw>`: uniform, one position per instance,
+  the scenes take a box per instance; redrawn where it would overlap the noisy deposit), without
+  the N(0, 0.01) noise (a box that finds no valid position in 100 draws stands at the aligned one);
+  ``reset(rng, box_positions)`` sets the positions instead (heat maps). The bounds start collapsed
+  on the aligned position, so cloning rollouts run there.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from toolimit.learn.adr import GOAL_BOX, AdrBounds, goal_box_spec
 from toolimit.learn.task import LearningTask
 from toolimit.robots import make_robot
 from toolimit.scenes.registry import make_scene
@@ -46,6 +57,11 @@ VELOCITY_PENALTY_START = 0.9
 REWARDS = ("sparse", "dense")
 
 
+def observation_size(n_joints: int, adr: bool) -> int:
+    """D: tool position 3 + quaternion 4 + joints N + time 1 (+ goal box x, y under ADR)."""
+    return 3 + 4 + n_joints + 1 + 2 * adr
+
+
 class TaskSimulator:
     """B instances of ``task`` (see the module docstring for observation, action and reward).
 
@@ -54,6 +70,8 @@ class TaskSimulator:
         batch_size: B.
         scene_kwargs: keyword arguments of the scene's constructor (e.g. fewer spheres in tests).
         reward: one of :data:`REWARDS` (see the module docstring).
+        adr: randomise the goal box inside ``adr_bounds`` and observe it (module docstring);
+            InputError for a scene without a goal box.
     """
 
     def __init__(
@@ -62,6 +80,7 @@ class TaskSimulator:
         batch_size: int = 1,
         scene_kwargs: dict[str, Any] | None = None,
         reward: str = "sparse",
+        adr: bool = False,
     ):
         if int(batch_size) < 1:
             raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
@@ -80,8 +99,18 @@ class TaskSimulator:
             raise ValueError(
                 f"the task's control step {task.control_dt} s differs from the scene's {self.scene.control_dt} s"
             )
+        self.scene_kwargs = scene_kwargs
         self.n_joints = len(task.joint_names)
-        self.observation_size = 3 + 4 + self.n_joints + 1
+        self.adr = adr
+        self.observation_size = observation_size(self.n_joints, adr)
+        #: The ADR bounds the goal box is drawn in (None without ADR); AdrCallback moves them.
+        self.adr_bounds: AdrBounds | None = None
+        if adr:
+            axes = goal_box_spec(self.scene).axes  # InputError for a scene without a goal box
+            self.adr_bounds = AdrBounds.at(task.params[GOAL_BOX], axes)
+        #: (B, 2) each instance's goal box x, y (m, world frame) as the last reset set it (ADR or
+        #: its ``box_positions``; zeros before).
+        self.box_positions = np.zeros((self.batch_size, 2))
         self.dt = task.control_dt
         self.horizon = task.horizon
         self.q = np.zeros((self.batch_size, self.n_joints))
@@ -92,25 +121,61 @@ class TaskSimulator:
         self._quaternion = np.zeros((self.batch_size, 4))  # (B, 4) w first, sign continuous
 
     # ------------------------------------------------------------------------------------ episode
-    def reset(self, rng: np.random.Generator) -> np.ndarray:
-        """Start B episodes; returns the observations (B, D)."""
+    def copy(self, **changes: Any) -> TaskSimulator:
+        """A new simulator of the same task, batch, scene and reward, with ``changes`` to them."""
+        kwargs = {
+            "batch_size": self.batch_size,
+            "scene_kwargs": self.scene_kwargs,
+            "reward": self.reward,
+            "adr": self.adr,
+        }
+        return TaskSimulator(self.task, **(kwargs | changes))
+
+    def reset(self, rng: np.random.Generator, box_positions: np.ndarray | None = None) -> np.ndarray:
+        """Start B episodes; returns the observations (B, D). ``box_positions`` (B, 2): the goal
+        boxes' x, y (m, world frame) instead of the ADR draw (the heat map's grid)."""
         start = self.task.reference_q[0] + rng.normal(0.0, JOINT_NOISE_STD, size=(self.batch_size, self.n_joints))
         self.q = np.clip(start, self.robot.lower, self.robot.upper)
-        self.scene.reset(self._noisy_params(rng), rng, self.batch_size)
+        params = self._noisy_params(rng, box_placed=box_positions is not None or self.adr_bounds is not None)
+        if box_positions is not None and not all(map(self.box_validity(params), np.reshape(box_positions, (-1, 2)))):
+            params = dict(self.task.params)  # the deposit's noise made a given box position invalid
+        elif box_positions is None and self.adr_bounds is not None:
+            box_positions = self.adr_bounds.draw(rng, self.batch_size, self.box_validity(params))
+        if box_positions is not None:
+            self.box_positions = np.broadcast_to(np.asarray(box_positions, dtype=float), (self.batch_size, 2)).copy()
+            params[GOAL_BOX] = self._box_parameter(params)
+        self.scene.reset(params, rng, self.batch_size)
         self.t = 0
         self._update_tool(first=True)
         return self.observation()
 
-    def _noisy_params(self, rng: np.random.Generator) -> dict[str, Any]:
+    def _noisy_params(self, rng: np.random.Generator, box_placed: bool) -> dict[str, Any]:
         """The task's scene parameters with N(0, PARAM_NOISE_STD) m on each position's x and y;
-        the exact ones if the noise makes them invalid (an element pushed into another)."""
+        the exact ones if the noise makes them invalid (an element pushed into another).
+        ``box_placed``: the goal box is placed afterwards (ADR, given positions), so it keeps the
+        aligned position here, which stays valid with the noisy others."""
         noisy: dict[str, Any] = {}
         for spec in self.scene.parameters:
             value = self.task.params[spec.name]
-            if spec.kind == "position":
+            if spec.kind == "position" and not (box_placed and spec.name == GOAL_BOX):
                 value = np.asarray(value, dtype=float) + np.r_[rng.normal(0.0, PARAM_NOISE_STD, 2), 0.0]
             noisy[spec.name] = value
         return noisy if self.scene.invalid_reason(noisy) is None else dict(self.task.params)
+
+    def _box_parameter(self, params: dict[str, Any]) -> np.ndarray:
+        """(B, 3) the goal box parameter with x, y from ``box_positions`` (z kept)."""
+        goal = np.repeat(np.asarray(params[GOAL_BOX], dtype=float)[None], self.batch_size, axis=0)
+        goal[:, :2] = self.box_positions
+        return goal
+
+    def box_validity(self, params: dict[str, Any]) -> Callable[[np.ndarray], bool]:
+        """Whether a goal box at x, y (2,) m makes a valid scene with the other ``params``."""
+        goal = np.asarray(params[GOAL_BOX], dtype=float)
+
+        def valid(position: np.ndarray) -> bool:
+            return self.scene.invalid_reason(params | {GOAL_BOX: np.r_[position, goal[2]]}) is None
+
+        return valid
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Apply actions (B, N) in [-1, 1]; returns observations (B, D), rewards (B,) and goal
@@ -144,9 +209,10 @@ class TaskSimulator:
         self._position, self._rotation, self._quaternion = positions, rotations, quaternion
 
     def observation(self) -> np.ndarray:
-        """(B, D) float32: tool position, quaternion (w first), joints, time fraction."""
+        """(B, D) float32: tool position, quaternion (w first), joints, time fraction (, goal box x, y)."""
         time = np.full((self.batch_size, 1), self.t / self.horizon)
-        return np.concatenate([self._position, self._quaternion, self.q, time], axis=1).astype(np.float32)
+        parts = [self._position, self._quaternion, self.q, time] + [self.box_positions] * self.adr
+        return np.concatenate(parts, axis=1).astype(np.float32)
 
     # ------------------------------------------------------------------------------------ expert
     def tracking_action(self) -> np.ndarray:

@@ -3,8 +3,10 @@
 ``learn_policy(task, out_dir, LearningConfig(...))`` writes into ``out_dir``:
 ``task.npz`` (the task), ``cloning.json`` (data and losses), ``checkpoint.zip/.json`` (every few
 updates), ``curve.jsonl`` (one line per update: env steps, mean return, success rate, goal reward,
-standard deviation, KL), ``policy.zip`` (the final SB3 model) and ``learning.json`` (settings,
-env steps, wall time split between simulation and learning). Run again on the same folder, it
+standard deviation, KL; under ADR the goal box bounds ``adr_low``, ``adr_high`` the update's
+episodes were drawn in), ``policy.zip`` (the final SB3 model) and ``learning.json`` (settings,
+env steps, wall time split between simulation and learning; under ADR the final bounds and every
+boundary test, :meth:`toolimit.learn.adr.AdrState.record`). Run again on the same folder, it
 resumes from the last checkpoint; a finished run returns at once.
 """
 
@@ -23,6 +25,8 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 
 from toolimit.artifacts import save_json
+from toolimit.learn.adr import EVERY as ADR_EVERY
+from toolimit.learn.adr import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
@@ -64,6 +68,9 @@ class LearningConfig:
         torch_threads: torch's intra-op threads while learning. One by default: the networks are
             small, and with two threads on a two-core machine that also simulates, a cloning step
             of 512 pairs took 176 ms instead of 11 ms (measured, other core busy).
+        adr: domain randomisation of the goal box (spades, :mod:`toolimit.learn.adr`): the box is
+            observed, cloned at the aligned position, then moved by the boundary tests.
+        adr_every: PPO updates between two boundary tests (:data:`toolimit.learn.adr.EVERY`).
     """
 
     timesteps: int = 200_000
@@ -80,6 +87,8 @@ class LearningConfig:
     scene_kwargs: dict[str, Any] | None = None
     reward: str = "sparse"
     torch_threads: int = 1
+    adr: bool = False
+    adr_every: int = ADR_EVERY
 
     def settings(self) -> PpoSettings:
         """The PPO settings of the preset."""
@@ -144,9 +153,11 @@ class _Curve(BaseCallback):
         if self.pending is None:
             return
         logged = self.model.logger.name_to_value
+        adr = cast(BatchedTaskVecEnv, self.training_env).adr
         record = self.pending | {
             "action_std_mean": float(torch.exp(cast(torch.Tensor, self.model.policy.log_std).detach()).mean()),
             "approx_kl": float(logged.get("train/approx_kl", float("nan"))),
+            **(adr.bounds.record() if adr is not None else {}),
         }
         with open(self.path, "a") as handle:
             handle.write(json.dumps(record) + "\n")
@@ -186,7 +197,9 @@ def _learn_policy(
     settings = config.settings()
     torch.manual_seed(config.seed)
     task.save(out_dir / TASK_NPZ)
-    env = BatchedTaskVecEnv(task, config.envs, seed=config.seed, scene_kwargs=config.scene_kwargs, reward=config.reward)
+    env = BatchedTaskVecEnv(
+        task, config.envs, seed=config.seed, scene_kwargs=config.scene_kwargs, reward=config.reward, adr=config.adr
+    )
     cloning_record: dict[str, Any] = {}
 
     def start() -> PPO:
@@ -200,13 +213,10 @@ def _learn_policy(
     model, resumed = resume_or_start(out_dir, env, start)
     curve = out_dir / CURVE_JSONL
     _truncate_curve(curve, model.num_timesteps)
-    train(
-        model,
-        config.timesteps,
-        out_dir,
-        config.checkpoint_every,
-        [_Curve(curve, config.timesteps, on_record, progress)],
-    )
+    callbacks: list[BaseCallback] = [_Curve(curve, config.timesteps, on_record, progress)]
+    if config.adr:  # after the curve: a line holds the bounds its episodes were drawn in
+        callbacks.append(AdrCallback(env, config.adr_every))
+    train(model, config.timesteps, out_dir, config.checkpoint_every, callbacks)
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
     simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
@@ -224,6 +234,8 @@ def _learn_policy(
         "learning_time_s": wall - simulation,
         "resumed": resumed,
     }
+    if env.adr is not None:
+        record["adr"] = env.adr.record(config.adr_every)
     save_json(out_dir / LEARNING_JSON, record)
     return LearningOutcome(model, out_dir, record)
 
@@ -240,6 +252,7 @@ def _clone(
         config.seed,
         config.scene_kwargs,
         config.reward,
+        config.adr,
     )
     report = clone(
         model.policy,

@@ -11,6 +11,10 @@ At the horizon the episode ends: ``dones`` is True and each ``info`` has ``termi
 SB3's Monitor writes it, so that PPO logs returns and success rates). ``TimeLimit.truncated`` is
 False: the time is part of the observation and nothing happens after H, so the value of the last
 state is zero and PPO must not bootstrap past it (a finite-horizon task, as the authors trained it).
+
+With ``adr=True`` each instance's goal box is drawn inside the ADR bounds at every reset (one
+position per instance) and observed; ``adr`` holds the bounds and the boundary tests' generator
+(:class:`toolimit.learn.adr.AdrState`, seeded from ``seed``), which checkpoints save.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices
 
+from toolimit.learn.adr import ADR_STREAM, AdrState
 from toolimit.learn.env import action_space, observation_space
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
@@ -37,6 +42,7 @@ class BatchedTaskVecEnv(VecEnv):
         seed: seed of the generator behind every reset (``VecEnv.seed`` replaces it).
         scene_kwargs: keyword arguments of the scene's constructor.
         reward: ``"sparse"`` or ``"dense"`` (:data:`toolimit.learn.simulator.REWARDS`).
+        adr: domain randomisation of the goal box (module docstring).
     """
 
     def __init__(
@@ -46,8 +52,11 @@ class BatchedTaskVecEnv(VecEnv):
         seed: int = 0,
         scene_kwargs: dict[str, Any] | None = None,
         reward: str = "sparse",
+        adr: bool = False,
     ):
-        self.simulator = TaskSimulator(task, batch_size=num_envs, scene_kwargs=scene_kwargs, reward=reward)
+        self.simulator = TaskSimulator(task, batch_size=num_envs, scene_kwargs=scene_kwargs, reward=reward, adr=adr)
+        bounds = self.simulator.adr_bounds
+        self.adr = None if bounds is None else AdrState(bounds, np.random.default_rng([seed, ADR_STREAM]))
         self.task = task
         self.render_mode = None
         super().__init__(num_envs, observation_space(self.simulator), action_space(self.simulator))

@@ -63,6 +63,9 @@ class ParameterSpec:
         axes: for ``"position"``: the coordinates (0 = x, 1 = y, 2 = z) the scene reads and checks
             against the bounds; a planar scene ignores the others.
         bound_reason: why the bounds are what they are, added to the message of a value outside them.
+        per_instance: for ``"position"``: ``reset`` also takes a (B, 3) array, one position per
+            instance (the spades' goal box, which domain randomisation moves per instance);
+            ``invalid_reason`` and ``footprints`` take one instance's (3,) value.
     """
 
     name: str
@@ -74,6 +77,7 @@ class ParameterSpec:
     description: str = ""
     axes: tuple[int, ...] = (0, 1, 2)
     bound_reason: str = ""
+    per_instance: bool = False
 
 
 def world_position(
@@ -83,10 +87,11 @@ def world_position(
     high_z: float = 0.0,
     axes: tuple[int, ...] = (0, 1, 2),
     bound_reason: str = "",
+    per_instance: bool = False,
 ) -> ParameterSpec:
     """A ``"position"`` spec (unit m) whose x and y may be anywhere in the world (within
     +-``WORLD_HALF_SIZE``) and whose z lies in [``low_z``, ``high_z``]; the default z = 0 is an
-    element standing on the ground (alignment then sets z = 0)."""
+    element standing on the ground (alignment then sets z = 0). ``per_instance``: see ParameterSpec."""
     return ParameterSpec(
         name,
         "position",
@@ -97,6 +102,7 @@ def world_position(
         description=description,
         axes=axes,
         bound_reason=bound_reason,
+        per_instance=per_instance,
     )
 
 
@@ -123,6 +129,8 @@ class Scene(Protocol):
 
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build B instances with these parameters; raises InvalidSceneParameters if invalid.
+
+        A ``per_instance`` position parameter (ParameterSpec) may be (B, 3): one per instance.
 
         The tool is absent until the first ``step``, which places it without velocity.
         """
@@ -273,14 +281,32 @@ class GoalTimer:
 def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:
     """Validate a ``reset`` call before any work; returns B as an int.
 
-    Raises InvalidSceneParameters with the scene's own reason, or ValueError for a batch size < 1.
+    A ``per_instance`` parameter given as (B, 3) is checked instance by instance (the message names
+    the instance). Raises InvalidSceneParameters with the scene's own reason, or ValueError for a
+    batch size < 1 or a per-instance array that is not (B, 3).
     """
-    reason = scene.invalid_reason(params)
-    if reason is not None:
-        raise InvalidSceneParameters(reason)
     if int(batch_size) < 1:
         raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
+    batched = {
+        spec.name
+        for spec in scene.parameters
+        if spec.per_instance and spec.name in params and np.ndim(params[spec.name]) == 2
+    }
+    for name in batched:
+        if np.shape(params[name]) != (batch_size, 3):
+            raise ValueError(f"per-instance {name} must be ({batch_size}, 3), got {np.shape(params[name])}")
+    for b in range(int(batch_size) if batched else 1):
+        instance = {name: np.asarray(value)[b] if name in batched else value for name, value in params.items()}
+        reason = scene.invalid_reason(instance)
+        if reason is not None:
+            raise InvalidSceneParameters(f"instance {b}: {reason}" if batched else reason)
     return int(batch_size)
+
+
+def instance_positions(params: SceneParams, name: str, batch_size: int) -> np.ndarray:
+    """(B, 3) the position parameter ``name`` of every instance: a (3,) value repeated, or the
+    (B, 3) per-instance values (a ``per_instance`` spec), world frame, m."""
+    return np.broadcast_to(np.asarray(params[name], dtype=float), (batch_size, 3)).copy()
 
 
 def batched_pose(tool_pose: ToolPose, batch_size: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,7 +1,9 @@
 """rerun recording of a learning run's curves (``curve.jsonl`` of :mod:`toolimit.learn.training`).
 
 Entities (timeline ``env_steps``): ``curves/return``, ``curves/success_rate``,
-``curves/goal_reward``, ``curves/action_std`` (normalised action units), ``curves/approx_kl``.
+``curves/goal_reward``, ``curves/action_std`` (normalised action units), ``curves/approx_kl``;
+under ADR (:mod:`toolimit.learn.adr`) the goal box bounds ``adr/x_low``, ``adr/x_high``,
+``adr/y_low``, ``adr/y_high`` (world frame, m).
 """
 
 from __future__ import annotations
@@ -35,4 +37,7 @@ def save_learning_recording(curve_file: str | Path, path: str | Path) -> Path | 
                 value = float(record[key])
                 if math.isfinite(value):
                     recording.log(f"curves/{entity}", rr.Scalars(value))
+            for side in ("low", "high") if "adr_low" in record else ():
+                for axis, value in zip("xy", record[f"adr_{side}"], strict=True):
+                    recording.log(f"adr/{axis}_{side}", rr.Scalars(float(value)))
     return Path(path)

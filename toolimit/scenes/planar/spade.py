@@ -10,7 +10,8 @@ World (pymunk x = world x, pymunk y = world z; world y is ignored):
   ``sand_jitter``, upward only in z). With ``sleeping`` the pile starts asleep: it costs nothing
   until the tool touches it, and woken circles resolve their millimetre overlaps then;
 * the goal box: two walls ``goal_wall_height`` tall, inner width ``2 * goal_half_width``, centred
-  at parameter ``goal_position`` x. It is a dynamic body (``goal_box_mass``, sliding on the ground
+  at parameter ``goal_position`` x (per instance if given as (B, 3): each instance has its own
+  pymunk space, so a box per instance costs nothing). It is a dynamic body (``goal_box_mass``, sliding on the ground
   with friction, no rotation), so the tool cannot carry or push sand through its walls: a spade that
   runs into it shoves the box. The deposit's walls are static (sand pushed out of the deposit earns
   nothing, and the deposit stays where alignment put it).
@@ -51,6 +52,7 @@ from toolimit.scenes.base import (
     SuccessTracker,
     check_reset,
     gaussian_closeness,
+    instance_positions,
     parameter_violation,
     require_counts,
     require_reset,
@@ -140,10 +142,13 @@ class PlanarSpadeScene(SceneBase):
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
         self.parameters: tuple[ParameterSpec, ...] = (
             world_position("sand_position", "centre of the sand deposit tray on the ground (x used)", axes=(0,)),
-            world_position("goal_position", "centre of the open goal box on the ground (x used)", axes=(0,)),
+            world_position(
+                "goal_position", "centre of the open goal box on the ground (x used)", axes=(0,), per_instance=True
+            ),
         )
         # The state of the B instances, built by reset.
-        self.sand_x = self.goal_x = 0.0  # deposit and goal box centres at reset, m
+        self.sand_x = 0.0  # deposit centre, m
+        self.goal_x = np.zeros(0)  # (B,) goal box centres at reset, m
         self._spaces: list[pymunk.Space] = []
         self._sand_bodies: list[list[pymunk.Body]] = []
         self._boxes: list[pymunk.Body] = []
@@ -178,7 +183,7 @@ class PlanarSpadeScene(SceneBase):
         """Build ``batch_size`` instances; each jitters the settled pile with ``rng``."""
         batch_size = check_reset(self, params, batch_size)
         self.sand_x = float(np.asarray(params["sand_position"], dtype=float)[0])
-        self.goal_x = float(np.asarray(params["goal_position"], dtype=float)[0])
+        self.goal_x = instance_positions(params, "goal_position", batch_size)[:, 0]
         dt = self.control_dt / self.substeps
         pile = settled_pile(
             self.sand_count,
@@ -190,7 +195,7 @@ class PlanarSpadeScene(SceneBase):
             self.solver_iterations,
         )
         self._spaces, self._sand_bodies, self._boxes = [], [], []
-        for _ in range(batch_size):
+        for goal_x in self.goal_x:
             space = pymunk.Space()
             configure_space(space, self.solver_iterations, self.sleeping)
             add_ground(space, self.sand.friction)
@@ -204,7 +209,7 @@ class PlanarSpadeScene(SceneBase):
             )
             box = add_walls(
                 space,
-                self.goal_x,
+                goal_x,
                 self.goal_half_width,
                 self.goal_wall_height,
                 WALL_THICKNESS,

@@ -323,8 +323,9 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, t
 
 @_inline
 def _walls_pass(b, previous, predicted, walls, radius, mu_s, mu_k, start, end, moved, scratch):  # type: ignore[no-untyped-def]
-    """Contacts of instance b's spheres with the walls (friction mu_s, mu_k), in place."""
-    wall_centers, wall_rotations, wall_halves, wall_bounds = walls
+    """Contacts of instance b's spheres with its walls (``walls``: per-instance arrays (B, K, ...);
+    friction mu_s, mu_k), in place."""
+    wall_centers, wall_rotations, wall_halves, wall_bounds = walls[0][b], walls[1][b], walls[2][b], walls[3][b]
     if wall_centers.shape[0] == 0:
         return
     for i in range(predicted.shape[1]):
@@ -426,7 +427,8 @@ def advance(
 
     ``tool`` is the tuple (box centers, rotations, half extents, bounds, capsule starts, ends,
     radii, low, high) of the tool's shapes in its frame with its bounds grown by the sphere radius,
-    ``walls`` the tuple (centers, rotations, half extents, bounds) of the static boxes (world frame).
+    ``walls`` the tuple (centers, rotations, half extents, bounds) of each instance's static boxes
+    (B, K, ...), world frame.
     """
     n_batch, n = positions.shape[0], positions.shape[1]
     sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2

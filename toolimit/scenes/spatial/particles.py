@@ -158,10 +158,12 @@ class GranularMaterial:
 
 @dataclass(frozen=True)
 class StaticBoxes:
-    """Fixed oriented boxes shared by all instances (walls), world frame.
+    """Fixed oriented boxes (walls), world frame: shared by all instances, or one set per instance
+    (a leading batch axis B: the spade's goal box placed per instance).
 
     Attributes:
-        centers: (K, 3) m. rotations: (K, 3, 3) box axes as columns. half_extents: (K, 3) m.
+        centers: (K, 3) or (B, K, 3) m. rotations: (K, 3, 3) or (B, K, 3, 3) box axes as columns.
+        half_extents: (K, 3) or (B, K, 3) m.
     """
 
     centers: np.ndarray
@@ -170,10 +172,10 @@ class StaticBoxes:
 
 
 def _box_bounds(centers: np.ndarray, rotations: np.ndarray, half_extents: np.ndarray, radius: float) -> np.ndarray:
-    """(K, 2, 3) axis-aligned lower and upper bounds of oriented boxes (K, ...) grown by ``radius``, in
-    the frame their centres and rotations are given in (m)."""
-    reach = np.einsum("kij,kj->ki", np.abs(rotations), half_extents) + radius
-    return np.stack([centers - reach, centers + reach], axis=1)
+    """(..., K, 2, 3) axis-aligned lower and upper bounds of oriented boxes (..., K, ...) grown by
+    ``radius``, in the frame their centres and rotations are given in (m)."""
+    reach = np.einsum("...ij,...j->...i", np.abs(rotations), half_extents) + radius
+    return np.stack([centers - reach, centers + reach], axis=-2)
 
 
 #: Initial capacity of each instance's Verlet list, in pairs per sphere (grown when exceeded).
@@ -185,7 +187,8 @@ class ParticleWorld:
 
     Args:
         material: sphere constants.
-        static_boxes: walls shared by all instances (world frame), or None.
+        static_boxes: walls (world frame), shared or per instance (then B must match the
+            ``reset`` positions'), or None.
         tool: the tool's shapes (tool frame) or None for no tool.
 
     State (public, world frame): ``positions`` (B, N, 3) m, ``velocities`` (B, N, 3) m/s; the tool
@@ -203,15 +206,14 @@ class ParticleWorld:
             if static_boxes is not None
             else StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
         )
-        self._walls = tuple(
-            np.ascontiguousarray(a, dtype=float)
-            for a in (
-                walls.centers,
-                walls.rotations,
-                walls.half_extents,
-                _box_bounds(walls.centers, walls.rotations, walls.half_extents, material.radius),
-            )
+        #: The walls' centers, rotations, half extents and bounds, per instance once reset.
+        self._wall_arrays = (
+            walls.centers,
+            walls.rotations,
+            walls.half_extents,
+            _box_bounds(walls.centers, walls.rotations, walls.half_extents, material.radius),
         )
+        self._walls: tuple[np.ndarray, ...] = ()  # the wall arrays per instance (B, K, ...), set by reset
         self.positions = np.zeros((0, 0, 3))
         self.velocities = np.zeros((0, 0, 3))
         self._carried = np.zeros((0, 0, 3))  # velocity the solver predicts with (see the module docstring)
@@ -268,6 +270,13 @@ class ParticleWorld:
         if velocities.shape != positions.shape:
             raise ValueError(f"velocities must have the shape of positions {positions.shape}, got {velocities.shape}")
         b, n, _ = positions.shape
+        shared = self._wall_arrays[0].ndim == 2
+        if not shared and len(self._wall_arrays[0]) != b:
+            raise ValueError(f"per-instance walls are for {len(self._wall_arrays[0])} instances, positions for {b}")
+        self._walls = tuple(
+            np.ascontiguousarray(np.broadcast_to(a, (b, *a.shape)) if shared else a, dtype=float)
+            for a in self._wall_arrays
+        )
         self.positions = np.ascontiguousarray(positions).copy()
         self.velocities = np.ascontiguousarray(velocities).copy()
         self._carried = self.velocities.copy()

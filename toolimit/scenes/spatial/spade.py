@@ -8,7 +8,8 @@ World frame: metres, z up, ground z = 0. The scene is the original experiments' 
   that frame the walls stand at x = -+0.2 m and at y = -0.2 m, and the side y = +0.2 m is open;
 * the **goal box** is an open-top square box of inner side ``GOAL_INNER`` (0.5 m) with walls
   ``GOAL_WALL_HEIGHT`` (7 cm) high, axis-aligned, centred at ``goal_position``; the ground is its
-  floor;
+  floor. ``goal_position`` may be (B, 3), one box per instance (domain randomisation): each
+  instance then has its own wall set (same count, same cost), and the goal region follows it;
 * ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap** at rest: as in the
   original, dropped once from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of
   height), simulated to rest and cached (:func:`settled_heap`), then moved to the deposit at
@@ -235,10 +236,11 @@ class SpatialSpadeScene(SceneBase):
                 unit="rad",
                 description="yaw of the deposit (its open side faces its +y)",
             ),
-            world_position("goal_position", "centre of the goal box's floor", axes=(0, 1)),
+            world_position("goal_position", "centre of the goal box's floor", axes=(0, 1), per_instance=True),
         )
         # The state of the B instances, built by reset.
-        self.sand_position, self.sand_yaw, self.goal_position = np.zeros(3), 0.0, np.zeros(3)  # m, rad, m
+        self.sand_position, self.sand_yaw = np.zeros(3), 0.0  # m, rad
+        self.goal_position = np.zeros((0, 3))  # (B, 3) goal box floor centres, m
         self.walls = StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
         self.success_tracker = SuccessTracker(0)
         self._world: ParticleWorld | None = None
@@ -273,16 +275,21 @@ class SpatialSpadeScene(SceneBase):
         b = self.batch_size = batch_size
         self.sand_position = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
         self.sand_yaw = float(params["sand_yaw"])
-        self.goal_position = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+        goal = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+        self.goal_position = np.broadcast_to(goal, (b, 3)).copy()
         deposit_rotation = rotation_z(self.sand_yaw)
         deposit_centers, deposit_halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, ("-x", "+x", "-y"))
         goal_centers, goal_halves = _walls(GOAL_INNER, GOAL_WALL_HEIGHT, ("-x", "+x", "-y", "+y"))
+        # one wall set shared by all instances, or one per instance if each has its own goal box
+        shape = goal.shape[:-1]
+        deposit_centers = np.broadcast_to(self.sand_position + deposit_centers @ deposit_rotation.T, (*shape, 3, 3))
         self.walls = StaticBoxes(
-            centers=np.concatenate(
-                [self.sand_position + deposit_centers @ deposit_rotation.T, self.goal_position + goal_centers]
+            centers=np.concatenate([deposit_centers, goal[..., None, :] + goal_centers], axis=-2),
+            rotations=np.broadcast_to(
+                np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
+                (*shape, 7, 3, 3),
             ),
-            rotations=np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
-            half_extents=np.concatenate([deposit_halves, goal_halves]),
+            half_extents=np.broadcast_to(np.concatenate([deposit_halves, goal_halves]), (*shape, 7, 3)),
         )
         heap = settled_heap(self.n_spheres, self.material, self.substeps)
         shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
@@ -331,7 +338,7 @@ class SpatialSpadeScene(SceneBase):
 
     def spheres_in_box(self) -> np.ndarray:
         """(B, N) bool: sphere centres inside the goal box."""
-        offset = self._require_reset().positions - self.goal_position
+        offset = self._require_reset().positions - self.goal_position[:, None]
         half = GOAL_INNER / 2
         return (
             (np.abs(offset[..., 0]) < half)
@@ -362,8 +369,12 @@ class SpatialSpadeScene(SceneBase):
         """
         positions = self._require_reset().positions
         walls = self.walls
-        local = np.einsum("bnkj,kja->bnka", positions[:, :, None] - walls.centers, walls.rotations)
-        outside = np.linalg.norm(np.maximum(np.abs(local) - walls.half_extents, 0.0), axis=-1)
+        b = len(positions)
+        centers = np.broadcast_to(walls.centers, (b, *walls.centers.shape[-2:]))
+        rotations = np.broadcast_to(walls.rotations, (b, *walls.rotations.shape[-3:]))
+        halves = np.broadcast_to(walls.half_extents, (b, *walls.half_extents.shape[-2:]))
+        local = np.einsum("bnkj,bkja->bnka", positions[:, :, None] - centers[:, None], rotations)
+        outside = np.linalg.norm(np.maximum(np.abs(local) - halves[:, None], 0.0), axis=-1)
         radius = self.material.radius
         deepest = np.maximum(radius - positions[..., 2], radius - outside.min(axis=-1))
         return np.maximum(deepest.max(axis=1), 0.0)
@@ -376,7 +387,7 @@ class SpatialSpadeScene(SceneBase):
         """(B,) the paper appendix's shaping: sand close to the box, spade close to the deposit
         (module docstring), in [0, 1.05]."""
         world = self._require_reset()
-        goal = self.goal_position + np.array([0.0, 0.0, self.material.radius])
+        goal = self.goal_position[:, None] + np.array([0.0, 0.0, self.material.radius])
         sand_term = gaussian_closeness(np.sum((world.positions - goal) ** 2, axis=-1)).mean(axis=1)
         if world.tool_position is None:
             return sand_term
@@ -399,14 +410,19 @@ class SpatialSpadeScene(SceneBase):
         return {
             "sphere_positions": world.positions[0].copy(),
             "sphere_radius": np.array(self.material.radius),
-            "wall_centers": self.walls.centers.copy(),
-            "wall_rotations": self.walls.rotations.copy(),
-            "wall_half_extents": self.walls.half_extents.copy(),
+            "wall_centers": instance_zero(self.walls.centers, 2),
+            "wall_rotations": instance_zero(self.walls.rotations, 3),
+            "wall_half_extents": instance_zero(self.walls.half_extents, 2),
             "sand_position": self.sand_position.copy(),
             "sand_yaw": np.array(self.sand_yaw),
-            "goal_position": self.goal_position.copy(),
+            "goal_position": self.goal_position[0].copy(),
             "goal_inner": np.array(GOAL_INNER),
             "goal_wall_height": np.array(GOAL_WALL_HEIGHT),
             **tool_snapshot(world.tool_position, world.tool_rotation),
             "in_box": np.array(self.goal_reward()[0]),
         }
+
+
+def instance_zero(array: np.ndarray, ndim: int) -> np.ndarray:
+    """A copy of instance 0's part of a shared (``ndim`` axes) or per-instance (``ndim`` + 1) array."""
+    return np.array(array if array.ndim == ndim else array[0])

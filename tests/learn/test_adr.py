@@ -1,0 +1,165 @@
+"""Domain randomisation of the goal box: observation, the boundary-test rule, seeding, resume, heat map."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ElementTree
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+from gymnasium.utils.env_checker import check_env
+
+from toolimit.errors import InputError
+from toolimit.learn import BatchedTaskVecEnv, TaskSimulator, ToolUseEnv, shipped_task
+from toolimit.learn import adr as adr_module
+from toolimit.learn.adr import DELTA, HALF_RANGE, AdrBounds, AdrState, boundary_test
+from toolimit.learn.heat_map import goal_box_heat_map
+from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
+from toolimit.viz.svg_heat_map import heat_map_svg
+
+TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20,
+                      value_steps=20, checkpoint_every=1, seed=0, adr=True, adr_every=1)
+
+
+def _parameters(model):
+    return torch.cat([p.detach().flatten() for p in model.policy.parameters()]).numpy()
+
+
+def test_observation_holds_each_instance_box_position(spade_task):
+    simulator = TaskSimulator(spade_task, batch_size=4, adr=True)
+    plain = TaskSimulator(spade_task, batch_size=4)
+    aligned = spade_task.params["goal_position"][:2]
+    observation = simulator.reset(np.random.default_rng(0))
+    assert observation.shape == (4, plain.observation_size + 2) == (4, 3 + 4 + 3 + 1 + 2)
+    np.testing.assert_allclose(observation[:, -2:], np.repeat(aligned[None], 4, 0), atol=1e-6)  # bounds start there
+    simulator.adr_bounds.low[0] -= 0.4
+    observation = simulator.reset(np.random.default_rng(0))
+    x = observation[:, -2]
+    assert len(set(np.round(x, 6))) == 4, "one position per instance"
+    assert np.all((x >= aligned[0] - 0.4 - 1e-6) & (x <= aligned[0] + 1e-6))
+    np.testing.assert_allclose(x, simulator.scene.goal_x, atol=1e-6)  # the scene's boxes are where observed
+    np.testing.assert_array_equal(observation[:, -1], 0.0)  # the planar box has no y: not randomised
+
+
+def test_a_tool_without_goal_box_is_refused_in_one_line():
+    with pytest.raises(InputError, match="the hammer scene has none") as error:
+        TaskSimulator(shipped_task("hammer", "planar"), adr=True)
+    assert "\n" not in str(error.value)
+
+
+def test_adr_environments_pass_the_checkers(spade_task):
+    env = ToolUseEnv("spade", "planar", adr=True)
+    assert env.observation_space.shape == (13,)
+    check_env(env, skip_render_check=True)
+    made = gym.make("toolimit/SpadePlanar-v0", adr=True)
+    observation, _ = made.reset(seed=1)
+    assert made.observation_space.contains(observation)
+
+
+def test_same_seed_same_draws(spade_task):
+    def draws(seed: int, envs: int) -> np.ndarray:
+        env = BatchedTaskVecEnv(spade_task, envs, seed=seed, adr=True)
+        env.adr.bounds.low[0] -= 0.3
+        return np.concatenate([env.reset()[:, -2] for _ in range(2)])
+
+    np.testing.assert_array_equal(draws(3, 2), draws(3, 2))
+    assert not np.array_equal(draws(3, 2), draws(4, 2))
+
+    def picks(envs: int) -> list[tuple[str, str]]:
+        state = BatchedTaskVecEnv(spade_task, envs, seed=5, adr=True).adr
+        return [(t["axis"], t["side"]) for t in (boundary_test(state, lambda _: 0.2) for _ in range(6))]
+
+    assert picks(2) == picks(4), "the tests' picks come from the ADR generator alone, whatever B"
+
+
+def _state(axes=(0, 1)) -> AdrState:
+    return AdrState(AdrBounds.at(np.array([0.2, -0.1, 0.0]), axes), np.random.default_rng(0))
+
+
+def test_a_high_return_at_the_bound_pushes_it_out_a_low_one_pulls_it_in():
+    state = _state()
+    aligned = state.bounds.aligned.copy()
+    pinned_at = []
+
+    def high(bounds: AdrBounds) -> float:
+        pinned_at.append((bounds.low.copy(), bounds.high.copy()))
+        return 0.6
+
+    record = boundary_test(state, high)
+    axis, side = "xy".index(record["axis"]), ("low", "high").index(record["side"])
+    low, high_bound = pinned_at[0]
+    assert low[axis] == high_bound[axis] == aligned[axis], "the batch pins the chosen coordinate at its bound"
+    assert record["after"] == pytest.approx(aligned[axis] + (-DELTA, DELTA)[side])
+    assert state.bounds.bound(axis, side) == record["after"]
+    for _ in range(200):  # pushes stop at the paper's rectangle
+        boundary_test(state, lambda _: 0.6)
+    np.testing.assert_allclose(state.bounds.low, aligned - HALF_RANGE)
+    np.testing.assert_allclose(state.bounds.high, aligned + HALF_RANGE)
+    boundary_test(state, lambda _: 0.3)  # between the thresholds: nothing moves
+    np.testing.assert_allclose(state.bounds.high - state.bounds.low, 2 * HALF_RANGE)
+    record = boundary_test(state, lambda _: -0.1)
+    assert abs(record["after"] - record["bound"]) == pytest.approx(DELTA), "a negative return pulls the bound in"
+    for _ in range(200):  # pulls stop at the aligned value
+        boundary_test(state, lambda _: -0.1)
+    np.testing.assert_allclose(state.bounds.low, aligned)
+    np.testing.assert_allclose(state.bounds.high, aligned)
+    assert len(state.tests) == 403
+
+
+def test_a_bound_is_not_pushed_where_the_box_cannot_stand_and_planar_moves_x_only():
+    state = _state(axes=(0, 2))
+    record = boundary_test(state, lambda _: 1.0, placeable=lambda _: False)
+    assert record["axis"] == "x" and record["after"] == record["bound"]
+    for _ in range(50):
+        boundary_test(state, lambda _: 1.0)
+    assert state.bounds.low[1] == state.bounds.high[1] == -0.1
+
+
+def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, monkeypatch):
+    """Every test pushes (threshold lowered), so bounds move and the environment is reset in between;
+    three updates in one go, or one, a stop and the rest: same network, same bounds and tests."""
+    monkeypatch.setattr(adr_module, "PUSH_THRESHOLD", -1.0)
+    per_update = spade_task.horizon * 2
+    three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
+    whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
+    learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
+                 progress=False)
+    (tmp_path / "split" / "policy.zip").unlink()
+    resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
+    assert resumed.record["resumed"]
+    np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
+    assert resumed.record["adr"] == whole.record["adr"]
+    tests = whole.record["adr"]["tests"]
+    assert len(tests) == 2  # before updates 2 and 3
+    # x grows away from the deposit only: 0.05 m towards it, the box would stand on it
+    assert whole.record["adr"]["range_m"][0] == pytest.approx(DELTA * sum(t["side"] == "low" for t in tests))
+    assert whole.record["adr"]["range_m"][0] > 0, "seed 0 pushes once, so the environment is reset mid-run"
+    curves = [[json.loads(line) for line in (tmp_path / name / CURVE_JSONL).read_text().splitlines()]
+              for name in ("whole", "split")]
+    assert curves[0] == [c | {"approx_kl": curves[0][k]["approx_kl"]} for k, c in enumerate(curves[1])]
+    assert curves[0][0]["adr_low"] == curves[0][0]["adr_high"] == whole.record["adr"]["aligned"]
+    saved = json.loads((tmp_path / "whole" / "learning.json").read_text())["adr"]
+    assert saved["adr_low"] == whole.record["adr"]["adr_low"] and saved["every"] == 1
+
+
+@pytest.fixture(scope="module")
+def cloned_adr_policy(spade_task, tmp_path_factory):
+    """Cloned (no PPO) from 4 tracking rollouts at the aligned box, observing it."""
+    config = LearningConfig(**{**TINY.__dict__, "clone_rollouts": 4, "clone_steps": 1500, "value_steps": 0})
+    return learn_policy(spade_task, tmp_path_factory.mktemp("adr_policy"), config, progress=False).model
+
+
+def test_heat_map_values_come_from_rollouts_and_the_svg_has_one_cell_per_grid_point(spade_task, cloned_adr_policy):
+    heat_map = goal_box_heat_map(cloned_adr_policy, spade_task, grid=3, seed=0)
+    assert heat_map.goal_rewards.shape == (1, 3), "the planar box has no y: one row"
+    left, middle, right = heat_map.goal_rewards[0]
+    np.testing.assert_allclose(heat_map.centres[0][1], spade_task.params["goal_position"][0])
+    assert middle >= 10 and middle > left, heat_map.goal_rewards  # aligned box filled, far corner not
+    assert np.isnan(right), "0.75 m towards the deposit the box would stand on it"
+    assert heat_map.observes_box and 0.5 < heat_map.reach < 2.0
+    root = ElementTree.fromstring(heat_map_svg(heat_map, "test"))
+    cells = [e for e in root.iter("{http://www.w3.org/2000/svg}rect") if e.get("class") == "cell"]
+    assert len(cells) == heat_map.goal_rewards.size
+    assert heat_map.record()["goal_rewards"][0][2] is None
