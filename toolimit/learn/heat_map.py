@@ -18,7 +18,7 @@ circle no motion of the arm can bring the blade over the box.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
@@ -128,7 +128,7 @@ def goal_box_heat_map(
         observation = simulator.reset(rng, positions)
         while not simulator.done:
             action, _ = model.predict(observation, deterministic=True)
-            observation, _, rewards = simulator.step(cast(np.ndarray, action))
+            observation, _, rewards = simulator.step(action)
         goal[start : start + len(chosen)] = rewards[: len(chosen)]
         success[start : start + len(chosen)] = simulator.is_success()[: len(chosen)]
     goal_rewards, successes = np.full(len(cells), np.nan), np.full(len(cells), np.nan)

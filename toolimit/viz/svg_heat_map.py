@@ -56,7 +56,7 @@ def heat_map_svg(heat_map: HeatMap, title: str, value_label: str = "spheres in t
     parts = [
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * MARGIN + width + LEGEND_WIDTH:.0f}" '
         f'height="{2 * MARGIN + height:.0f}" font-family="sans-serif" font-size="12">',
-        f'<title>{escape(title)}</title>',
+        f"<title>{escape(title)}</title>",
         f'<text x="{MARGIN}" y="{MARGIN / 2:.0f}" font-size="15">{escape(title)}</text>',
         f'<clipPath id="map"><rect x="{MARGIN}" y="{MARGIN}" width="{width:.2f}" height="{height:.2f}"/></clipPath>',
     ]
@@ -112,7 +112,9 @@ def _axes(x0: float, x1: float, y0: float, y1: float, px, width: float, height: 
     for value in np.arange(math.ceil(y0 / 0.25) * 0.25, y1 + 1e-9, 0.25):
         _, y = px(x0, value)
         parts.append(f'<text x="{MARGIN - 6}" y="{y + 4:.2f}" text-anchor="end">{value:.2f}</text>')
-    parts.append(f'<text x="{MARGIN + width / 2:.2f}" y="{MARGIN + height + 36:.2f}" text-anchor="middle">box x (m)</text>')
+    parts.append(
+        f'<text x="{MARGIN + width / 2:.2f}" y="{MARGIN + height + 36:.2f}" text-anchor="middle">box x (m)</text>'
+    )
     parts.append(
         f'<text x="{MARGIN - 45}" y="{MARGIN + height / 2:.2f}" text-anchor="middle" '
         f'transform="rotate(-90 {MARGIN - 45} {MARGIN + height / 2:.2f})">box y (m)</text>'
