@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from toolimit.align.outputs import CANDIDATES_NPZ
 from toolimit.errors import InputError
 from toolimit.experiments.cells import CellResult, Experiment
 from toolimit.learn.cloning import collect_demonstrations
@@ -34,7 +35,7 @@ def measure_tool_only(experiment: Experiment, task: LearningTask, episodes: int,
             f"the task of {experiment.name} names no selected candidate ({source}): make it with "
             "`toolimit trajopt --select-by-robot`"
         )
-    _, _, candidates = load_candidates(Path(source["alignment"]) / "candidates.npz")
+    _, _, candidates = load_candidates(Path(source["alignment"]) / CANDIDATES_NPZ)
     targets = candidates[int(source["candidate"])].targets
     if not np.isclose(targets.fps * task.control_dt, 1.0):
         raise InputError(
