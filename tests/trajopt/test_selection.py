@@ -89,6 +89,20 @@ def test_selection_keeps_the_time_scale_whose_robot_replay_earns_most(spade_alig
     assert json.loads((out / "trajectory.json").read_text())["time_scale"] == best["time_scale"]
 
 
+def test_selection_is_the_same_with_two_worker_processes(spade_alignment, tmp_path, capsys):
+    """Candidates tracked side by side in spawned workers give the selection of one process."""
+    _, alignment = spade_alignment
+    records = []
+    for workers in ("1", "2"):
+        out = tmp_path / f"workers{workers}"
+        argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment), "--select-by-robot",
+                "--velocity-weight", "1e-4", "--init", "hold", "--starts", "2", "--quiet", "--workers", workers,
+                "--out", str(out)]
+        assert main(argv) == 0, capsys.readouterr().err
+        records.append(json.loads((out / "selection.json").read_text()))
+    assert records[0] == records[1]  # same machine, same process type: bit for bit
+
+
 def test_selection_needs_an_alignment(tmp_path, capsys, video_demos_dir):
     argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--poses", str(video_demos_dir / "spade_video1_aligned.npz"),
             "--select-by-robot", "--out", str(tmp_path / "x")]

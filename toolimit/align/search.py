@@ -10,12 +10,9 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import multiprocessing
 import re
-import signal
 import time
 from collections.abc import Callable, Generator, Iterator, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,12 +31,13 @@ from toolimit.align.sampler import (
 from toolimit.demos.cleaning import CleaningReport, clean_demo
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.errors import InputError, InvalidSceneParameters
-from toolimit.interrupts import Interrupted, interruptible, starting_processes
+from toolimit.interrupts import Interrupted, interruptible
 from toolimit.progress import tqdm
 from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.replay import replay
 from toolimit.tools import ToolPose
+from toolimit.workers import ordered_results
 
 SceneFactory = Callable[[], Scene]
 
@@ -240,8 +238,6 @@ _WORKER_EVALUATOR: SampleEvaluator | None = None
 
 def _init_worker(scene_factory: SceneFactory, *evaluator_args: object) -> None:
     global _WORKER_EVALUATOR
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the process group is the parent's to handle
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # ignored now: no need to keep it blocked
     _WORKER_EVALUATOR = SampleEvaluator(scene_factory(), *evaluator_args)  # type: ignore[arg-type]
 
 
@@ -258,7 +254,8 @@ def _chunks(first: int, total: int, size: int) -> Iterator[tuple[int, int]]:
 def _outcomes_in_order(
     evaluator: SampleEvaluator, scene_factory: SceneFactory, config: AlignmentConfig, workers: int, first: int
 ) -> Generator[list[SampleOutcome], None, None]:
-    """Chunks of outcomes in index order from sample ``first``; the consumer stops when it has enough."""
+    """Chunks of outcomes in index order from sample ``first``; the consumer stops when it has enough
+    (closing this generator ends the worker processes)."""
     chunks = _chunks(first, config.samples, config.chunk_size)
     if workers == 1:
         for start, stop in chunks:
@@ -273,35 +270,7 @@ def _outcomes_in_order(
         evaluator.min_distance,
         evaluator.seed,
     )
-    context = multiprocessing.get_context("spawn")
-    executor = ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=init_args)
-    pending: list[Future[list[SampleOutcome]]] = []
-    try:
-        for start, stop in chunks:
-            if len(pending) < workers:  # the submits that start the worker processes
-                with starting_processes():
-                    pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
-            else:
-                pending.append(executor.submit(_evaluate_range_in_worker, start, stop))
-            if len(pending) >= 2 * workers:
-                yield pending.pop(0).result()
-        while pending:
-            yield pending.pop(0).result()
-    finally:
-        _stop_workers(executor)
-
-
-def _stop_workers(executor: ProcessPoolExecutor) -> None:
-    """Cancel the queued chunks and end the worker processes now, without waiting for running chunks
-    (their results are not needed: the search has enough, or was interrupted). Python 3.14 has
-    ``executor.terminate_workers()``; before it, the processes are only reachable as ``_processes``."""
-    processes = list((getattr(executor, "_processes", None) or {}).values())
-    executor.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        if process.is_alive():
-            process.terminate()
-    for process in processes:
-        process.join(timeout=1.0)
+    yield from ordered_results(_evaluate_range_in_worker, chunks, workers, _init_worker, init_args)
 
 
 def align(

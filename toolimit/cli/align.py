@@ -11,7 +11,6 @@ is still written, with an empty candidate list, and no aligned demo), 2 bad inpu
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -20,12 +19,14 @@ from toolimit.cli import (
     add_out_argument,
     add_seed_argument,
     add_tool_argument,
+    add_workers_argument,
     add_world_argument,
     check_count,
     check_output_file,
     check_output_folder,
     check_scene,
     check_writable_folder,
+    worker_count,
 )
 
 DEFAULT_SAMPLES = 20_000
@@ -57,12 +58,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help=f"stop after this many samples with a reward (default: {DEFAULT_CANDIDATES})",
     )
     add_seed_argument(parser)
-    parser.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="worker processes (default: up to 4, one per CPU core); results do not depend on it",
-    )
+    add_workers_argument(parser)
     add_out_argument(parser)
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument(
@@ -91,8 +87,7 @@ def _check_arguments(args: argparse.Namespace) -> int:
     if args.z_offset_std is not None and not args.z_offset_std > 0:
         raise CliError(f"--z-offset-std: must be a positive number of metres, got {args.z_offset_std}")
     check_count("--seed", args.seed, minimum=0)
-    workers = args.workers if args.workers is not None else max(1, min(4, os.cpu_count() or 1))
-    check_count("--workers", workers)
+    workers = worker_count(args.workers)
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
     check_output_folder(args.out, "--out")

@@ -18,11 +18,13 @@ from toolimit.cli import (
     add_out_argument,
     add_seed_argument,
     add_tool_argument,
+    add_workers_argument,
     check_choice,
     check_count,
     check_output_file,
     check_output_folder,
     load_poses,
+    worker_count,
 )
 
 
@@ -50,6 +52,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--starts", type=int, default=8, help="base initialisations (default: 8)")
     add_seed_argument(parser, "seed of the random starts beyond 8")
+    add_workers_argument(parser)
     parser.add_argument(
         "--init",
         choices=("hold", "rollout", "both"),
@@ -114,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     check_choice("--robot", args.robot, ROBOTS, "robot")
     check_choice("--tool", args.tool, sorted(TOOLS), "tool")
     check_count("--starts", args.starts)
+    worker_count(args.workers)  # checked before any work
     check_count("--seed", args.seed, minimum=0)
     scales = parse_time_scales(args.time_scale)
     for flag, value in (("--velocity-weight", args.velocity_weight), ("--posture-weight", args.posture_weight)):
@@ -183,7 +187,15 @@ def _select_by_robot(args: argparse.Namespace, robot, options, time_scales: tupl
     if tool != args.tool:
         raise CliError(f"--tool: the alignment in {args.alignment} is for the {tool}, not the {args.tool}")
     selection = select_by_robot_execution(
-        robot, candidates, tool, world, options, seed=args.seed, progress=not args.quiet, time_scales=time_scales
+        robot,
+        candidates,
+        tool,
+        world,
+        options,
+        seed=args.seed,
+        progress=not args.quiet,
+        time_scales=time_scales,
+        workers=worker_count(args.workers),
     )
     save_json(args.out / "selection.json", selection.record(candidates))
     for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):

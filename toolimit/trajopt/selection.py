@@ -34,6 +34,7 @@ from toolimit.trajopt.execution import execute_in_scene
 from toolimit.trajopt.problem import PoseTargets
 from toolimit.trajopt.result import TrajectoryResult
 from toolimit.trajopt.track import TrackOptions, track
+from toolimit.workers import ordered_results
 
 
 @dataclass(frozen=True)
@@ -142,6 +143,7 @@ def select_by_robot_execution(
     replays: int = 10,
     progress: bool = True,
     time_scales: tuple[float, ...] | None = None,
+    workers: int = 1,
 ) -> RobotSelection:
     """Track every candidate (:func:`~toolimit.trajopt.track.track`), replay the robot in its scene
     ``replays`` times and pick the candidate with the highest mean robot reward.
@@ -149,49 +151,68 @@ def select_by_robot_execution(
     ``time_scales``: the slow-down factors to track each candidate at (the module docstring says
     how one is kept); None tracks at ``options.time_scale`` only. Candidate k's tracking and
     replays draw from ``default_rng([seed, k])``, its scales in ascending order; its base guesses
-    avoid the scene's element footprints.
+    avoid the scene's element footprints. ``workers`` processes track candidates side by side
+    (:mod:`toolimit.workers`); the selection does not depend on their number.
     """
     if not candidates:
         raise InputError("no alignment candidate to select from")
-    scales = sorted(time_scales) if time_scales is not None else [options.time_scale]
+    if not (isinstance(workers, int) and workers >= 1):
+        raise InputError(f"workers: expected a positive integer, got {workers!r}")
+    scales = tuple(sorted(time_scales) if time_scales is not None else [options.time_scale])
     if not scales:
         raise InputError("the time-scale grid is empty")
-    scene = make_scene(tool, world)
     trajectories: list[TrajectoryResult | None] = []
     rewards: list[float] = []
     refusals: list[str | None] = []
     by_scale: list[dict[float, float]] = []
-    bar = tqdm(total=len(candidates) * len(scales), desc="robot execution", unit="track", disable=not progress)
-    for k, candidate in enumerate(candidates):
-        rng = np.random.default_rng([seed, k])
-        candidate_options = replace(options, footprints=scene.footprints(candidate.params))
-        kept: tuple[float, TrajectoryResult] | None = None
-        refusal: str | None = None
-        by_scale.append({})
-        for scale in scales:
-            try:  # refused where every base the solver finds, or the one it keeps, stands in an element
-                trajectory = track(
-                    robot, candidate.targets, replace(candidate_options, time_scale=float(scale)), rng=rng
-                )
-                reward = float(np.mean(execute_in_scene(robot, trajectory, scene, candidate.params, rng, replays)))
-            except BaseInsideFootprint as error:
-                by_scale[k][float(scale)] = float("nan")
-                refusal = str(error)
-                bar.update()
-                continue
-            by_scale[k][float(scale)] = reward
-            if kept is None or (reward, -np.median(trajectory.position_error)) > (
-                kept[0],
-                -np.median(kept[1].position_error),
-            ):
-                kept = (reward, trajectory)
+    arguments = (
+        (robot, candidate, k, tool, world, options, seed, replays, scales) for k, candidate in enumerate(candidates)
+    )
+    with tqdm(total=len(candidates), desc="robot execution", unit="candidate", disable=not progress) as bar:
+        for kept, refusal, rewards_by_scale in ordered_results(_execute_candidate, arguments, workers):
+            trajectories.append(None if kept is None else kept[1])
+            rewards.append(float("nan") if kept is None else kept[0])
+            refusals.append(refusal if kept is None else None)
+            by_scale.append(rewards_by_scale)
             bar.update()
-        trajectories.append(None if kept is None else kept[1])
-        rewards.append(float("nan") if kept is None else kept[0])
-        refusals.append(refusal if kept is None else None)
-    bar.close()
     robot_rewards = np.array(rewards)
     ranked = [k for k in range(len(candidates)) if robot_rewards[k] > 0]
     costs = [float("nan") if trajectory is None else trajectory.cost for trajectory in trajectories]
     best = min(ranked, key=lambda k: (-robot_rewards[k], costs[k]), default=None)
     return RobotSelection(best, trajectories, robot_rewards, refusals, by_scale)
+
+
+def _execute_candidate(
+    robot: RobotModel,
+    candidate: AlignedCandidate,
+    k: int,
+    tool: str,
+    world: str,
+    options: TrackOptions,
+    seed: int,
+    replays: int,
+    scales: tuple[float, ...],
+) -> tuple[tuple[float, TrajectoryResult] | None, str | None, dict[float, float]]:
+    """Candidate k tracked and replayed at every scale: the kept (robot reward, trajectory) (None
+    when every scale was refused), the last refusal, and the robot reward per scale (NaN: refused)."""
+    scene = make_scene(tool, world)
+    rng = np.random.default_rng([seed, k])
+    candidate_options = replace(options, footprints=scene.footprints(candidate.params))
+    kept: tuple[float, TrajectoryResult] | None = None
+    refusal: str | None = None
+    by_scale: dict[float, float] = {}
+    for scale in scales:
+        try:  # refused where every base the solver finds, or the one it keeps, stands in an element
+            trajectory = track(robot, candidate.targets, replace(candidate_options, time_scale=float(scale)), rng=rng)
+            reward = float(np.mean(execute_in_scene(robot, trajectory, scene, candidate.params, rng, replays)))
+        except BaseInsideFootprint as error:
+            by_scale[float(scale)] = float("nan")
+            refusal = str(error)
+            continue
+        by_scale[float(scale)] = reward
+        if kept is None or (reward, -np.median(trajectory.position_error)) > (
+            kept[0],
+            -np.median(kept[1].position_error),
+        ):
+            kept = (reward, trajectory)
+    return kept, refusal, by_scale

@@ -1,0 +1,77 @@
+"""Work spread over spawned worker processes, results in order, stopped at once by Ctrl-C.
+
+``ordered_results(function, arguments, workers, initializer, initargs)`` yields
+``function(*arguments[i])`` in index order, computing them in ``workers`` processes started with the
+"spawn" method (each first runs ``initializer(*initargs)``, e.g. to build its scene once). At most
+two tasks per worker are queued ahead of the consumer, so a consumer that stops early (the
+alignment, once it holds enough candidates) wastes little. Workers ignore SIGINT: a Ctrl-C to the
+process group is the parent's to handle (:mod:`toolimit.interrupts`); when the consumer stops or is
+interrupted, queued tasks are cancelled and the processes end without waiting for running ones.
+Results do not depend on the number of workers as long as each task draws its randomness from its
+own arguments. A script that uses workers needs the ``if __name__ == "__main__":`` guard.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+from collections.abc import Callable, Generator, Iterable
+from concurrent.futures import Future, ProcessPoolExecutor
+from typing import Any, TypeVar
+
+from toolimit.interrupts import starting_processes
+
+Result = TypeVar("Result")
+
+
+def ordered_results(
+    function: Callable[..., Result],
+    arguments: Iterable[tuple[Any, ...]],
+    workers: int,
+    initializer: Callable[..., None] | None = None,
+    initargs: tuple[Any, ...] = (),
+) -> Generator[Result, None, None]:
+    """``function(*args)`` for each ``args`` of ``arguments``, in order (module docstring); in
+    this process when ``workers`` is 1 (``initializer`` is then not called)."""
+    if workers == 1:
+        for args in arguments:
+            yield function(*args)
+        return
+    context = multiprocessing.get_context("spawn")
+    executor = ProcessPoolExecutor(
+        workers, mp_context=context, initializer=_start_worker, initargs=(initializer, initargs)
+    )
+    pending: list[Future[Result]] = []
+    try:
+        for args in arguments:
+            if len(pending) < workers:  # the submits that start the worker processes
+                with starting_processes():
+                    pending.append(executor.submit(function, *args))
+            else:
+                pending.append(executor.submit(function, *args))
+            if len(pending) >= 2 * workers:
+                yield pending.pop(0).result()
+        while pending:
+            yield pending.pop(0).result()
+    finally:
+        stop_workers(executor)
+
+
+def _start_worker(initializer: Callable[..., None] | None, initargs: tuple[Any, ...]) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the process group is the parent's to handle
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # ignored now: no need to keep it blocked
+    if initializer is not None:
+        initializer(*initargs)
+
+
+def stop_workers(executor: ProcessPoolExecutor) -> None:
+    """Cancel the queued tasks and end the worker processes now, without waiting for running ones
+    (their results are not needed: the consumer has enough, or was interrupted). Python 3.14 has
+    ``executor.terminate_workers()``; before it, the processes are only reachable as ``_processes``."""
+    processes = list((getattr(executor, "_processes", None) or {}).values())
+    executor.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=1.0)
