@@ -5,8 +5,8 @@
 "spawn" method (each first runs ``initializer(*initargs)``, e.g. to build its scene once). At most
 two tasks per worker are queued ahead of the consumer, so a consumer that stops early (the
 alignment, once it holds enough candidates) wastes little. Workers ignore SIGINT: a Ctrl-C to the
-process group is the parent's to handle (:mod:`toolimit.interrupts`); when the consumer stops or is
-interrupted, queued tasks are cancelled and the processes end without waiting for running ones.
+process group is the parent's to handle (:mod:`toolimit.interrupts`); when the consumer stops early
+or is interrupted, queued tasks are cancelled and the processes end without waiting for running ones.
 Results do not depend on the number of workers as long as each task draws its randomness from its
 own arguments. A script that uses workers needs the ``if __name__ == "__main__":`` guard.
 """
@@ -42,6 +42,7 @@ def ordered_results(
         workers, mp_context=context, initializer=_start_worker, initargs=(initializer, initargs)
     )
     pending: list[Future[Result]] = []
+    finished = False
     try:
         for args in arguments:
             if len(pending) < workers:  # the submits that start the worker processes
@@ -53,8 +54,12 @@ def ordered_results(
                 yield pending.pop(0).result()
         while pending:
             yield pending.pop(0).result()
+        finished = True
     finally:
-        stop_workers(executor)
+        if finished:  # every task done: the idle workers exit on their own, cleanly
+            executor.shutdown(wait=True)
+        else:
+            stop_workers(executor)
 
 
 def _start_worker(initializer: Callable[..., None] | None, initargs: tuple[Any, ...]) -> None:
