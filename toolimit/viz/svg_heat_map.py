@@ -25,7 +25,7 @@ INVALID = "#bdbdbd"
 #: Size of the map's longer side (px) and the margins around it (px).
 MAP_SIZE = 520
 MARGIN = 60
-LEGEND_WIDTH = 110
+LEGEND_WIDTH = 170  # the colour bar, its ticks and its title
 
 
 def colour(fraction: float) -> str:
