@@ -148,9 +148,11 @@ def _reproduce_experiment(
 ) -> int:
     """Run the pipeline and the baselines of one experiment and save its missing cells; an exit code."""
     from toolimit.artifacts import save_json
+    from toolimit.cli.run import RUN_JSON
     from toolimit.experiments.cells import METHODS
     from toolimit.experiments.measure import measure_policy, measure_tool_only, measure_trajopt
     from toolimit.learn.task import TASK_NPZ, LearningTask
+    from toolimit.learn.training import LEARNING_JSON
 
     cells_dir, folder = args.out / "cells", args.out / experiment.name
     missing = [m for m in METHODS if not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()]
@@ -167,8 +169,8 @@ def _reproduce_experiment(
         print(f"[{experiment.name}] the pipeline stopped (exit {code}): no cells for this experiment")
         return code
     task = LearningTask.load(method_dir / "learning" / TASK_NPZ)
-    learned = json.loads((method_dir / "learning" / "learning.json").read_text())["config"]
-    stage_times = json.loads((method_dir / "run.json").read_text())["stage_times_s"]
+    learned = json.loads((method_dir / "learning" / LEARNING_JSON).read_text())["config"]
+    stage_times = json.loads((method_dir / RUN_JSON).read_text())["stage_times_s"]
     episodes, seed = chosen.episodes, args.seed + EVALUATION_SEED
     code = 0
     for method in missing:

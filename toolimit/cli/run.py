@@ -103,6 +103,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from toolimit.cli import main as toolimit
     from toolimit.cli.evaluate import EVALUATION_JSON, evaluation_record
+    from toolimit.learn.ppo import POLICY_ZIP
+    from toolimit.learn.training import LEARNING_JSON
     from toolimit.trajopt.result import TRAJECTORY_NPZ
 
     if args.world not in DEFAULT_TIMESTEPS:
@@ -174,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
         ),
         (
             "learning",
-            lambda: (learning / "policy.zip").is_file() and (learning / "learning.json").is_file(),
+            lambda: (learning / POLICY_ZIP).is_file() and (learning / LEARNING_JSON).is_file(),
             [
                 "learn",
                 "--alignment",
@@ -232,7 +234,7 @@ def run(args: argparse.Namespace) -> int:
     record, evaluation, task = evaluation_record(learning, args.episodes, seed=1000)
     times["evaluation"] = time.perf_counter() - started
     _save_stage_times(args.out, times)
-    learned = json.loads((learning / "learning.json").read_text())
+    learned = json.loads((learning / LEARNING_JSON).read_text())
     record |= {
         "env_steps": learned["env_steps"],
         "wall_time_s": sum(times.values()),

@@ -181,7 +181,7 @@ def _select_by_robot(args: argparse.Namespace, robot, options, time_scales: tupl
     result) of the best, or (None, None) after saying why no candidate's robot replay earned a reward."""
     from toolimit.align.outputs import CANDIDATES_NPZ
     from toolimit.artifacts import save_json
-    from toolimit.trajopt.selection import load_candidates, select_by_robot_execution
+    from toolimit.trajopt.selection import SELECTION_JSON, load_candidates, select_by_robot_execution
 
     tool, world, candidates = load_candidates(args.alignment / CANDIDATES_NPZ)
     if tool != args.tool:
@@ -197,14 +197,14 @@ def _select_by_robot(args: argparse.Namespace, robot, options, time_scales: tupl
         time_scales=time_scales,
         workers=worker_count(args.workers),
     )
-    save_json(args.out / "selection.json", selection.record(candidates))
+    save_json(args.out / SELECTION_JSON, selection.record(candidates))
     for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):
         if trajectory is None:
             print(f"candidate {k}: refused ({selection.refusals[k]})")
         else:
             print(f"candidate {k}: robot replay reward {reward:.1f}; {trajectory.describe()}")
     if selection.best is None:
-        print(f"no candidate's robot replay earned a goal reward; wrote {args.out / 'selection.json'}", file=sys.stderr)
+        print(f"no candidate's robot replay earned a goal reward; wrote {args.out / SELECTION_JSON}", file=sys.stderr)
         return None, None
     print(
         f"selected candidate {selection.best} (alignment reward "

@@ -31,10 +31,8 @@ from toolimit.robots import make_robot
 from toolimit.scenes.registry import make_scene, scripted_motion
 from toolimit.scenes.replay import replay
 from toolimit.trajopt.problem import PoseTargets
-from toolimit.trajopt.selection import AlignedCandidate, select_by_robot_execution
+from toolimit.trajopt.selection import SELECTION_JSON, AlignedCandidate, select_by_robot_execution
 from toolimit.trajopt.track import TrackOptions
-
-SELECTION_JSON = "selection.json"
 
 
 def kinesthetic_task(

@@ -211,14 +211,14 @@ def task_from_pipeline(
     from toolimit.align.outputs import ALIGNED_DEMO_NPZ, CANDIDATES_NPZ
     from toolimit.robots import make_robot
     from toolimit.scenes.registry import make_scene
-    from toolimit.trajopt.selection import load_candidates
+    from toolimit.trajopt.selection import SELECTION_JSON, load_candidates
 
     alignment_dir, trajectory_dir = Path(alignment_dir), Path(trajectory_dir)
     try:
         trajectory = TrajectoryResult.load(trajectory_dir)
     except (OSError, ValueError, KeyError) as error:
         raise TaskFileError(str(error)) from None
-    selection_file = trajectory_dir / "selection.json"
+    selection_file = trajectory_dir / SELECTION_JSON
     if selection_file.is_file():
         best = json.loads(selection_file.read_text())["best"]
         tool, world, candidates = load_candidates(alignment_dir / CANDIDATES_NPZ)

@@ -39,6 +39,9 @@ from toolimit.trajopt.result import TrajectoryResult
 from toolimit.trajopt.track import TrackOptions, track
 from toolimit.workers import ordered_results
 
+#: The robot's selection record (``RobotSelection.record``) beside the kept trajectory.
+SELECTION_JSON = "selection.json"
+
 
 @dataclass(frozen=True)
 class AlignedCandidate:
