@@ -17,7 +17,9 @@ Presets: ``quick`` (the planar spade, tiny budgets: a minute, for CI and a first
 (the same experiment with ``toolimit run``'s planar budgets: the paper's pattern in a quarter of an
 hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstrations and the authors' real recording,
 the hammer and the scythe on one demonstration each; the default budgets of ``toolimit run``).
-``--demo`` replaces the preset's demonstrations. Exit codes: 0 done, 1 an experiment's pipeline
+``--demo`` replaces the preset's demonstrations and ``--methods`` keeps some of the methods (e.g. the
+method and the sparse baseline first, ``--methods final,sparse_ppo``; the others on a later run into
+the same folder). Exit codes: 0 done, 1 an experiment's pipeline
 found nothing or its robot cannot track the scripted motion of LfD (those cells are missing from
 the results; a line says why), 2 bad input, 130 interrupted.
 """
@@ -32,7 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_output_folder
-from toolimit.experiments.cells import CellResult, Experiment
+from toolimit.experiments.cells import METHODS, CellResult, Experiment
 
 if TYPE_CHECKING:
     from toolimit.learn.task import LearningTask
@@ -95,10 +97,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="a demonstration to run instead of the preset's (repeatable; the tool is read from the "
         "file name's prefix, spade_..., hammer_..., scythe_...; world and robot are the preset's first)",
     )
+    parser.add_argument(
+        "--methods",
+        type=_methods,
+        default=METHODS,
+        help=f"comma-separated methods to measure (default: all, {','.join(METHODS)}); the others are left for a later run",
+    )
     add_out_argument(parser, "output folder (one sub-folder per experiment, cells/, results.*)")
     add_seed_argument(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run)
+
+
+def _methods(text: str) -> tuple[str, ...]:
+    """``--methods``: known method names, in the figure's order; argparse turns the error into one line."""
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in names if name not in METHODS]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown method(s) {', '.join(unknown) or '(none given)'}; known: {', '.join(METHODS)}"
+        )
+    return tuple(m for m in METHODS if m in names)
 
 
 def _experiments(args: argparse.Namespace, chosen: Preset) -> tuple[Experiment, ...]:
@@ -149,13 +168,12 @@ def _reproduce_experiment(
     """Run the pipeline and the baselines of one experiment and save its missing cells; an exit code."""
     from toolimit.artifacts import save_json
     from toolimit.cli.run import RUN_JSON
-    from toolimit.experiments.cells import METHODS
     from toolimit.experiments.measure import measure_policy, measure_tool_only, measure_trajopt
     from toolimit.learn.task import TASK_NPZ, LearningTask
     from toolimit.learn.training import LEARNING_JSON
 
     cells_dir, folder = args.out / "cells", args.out / experiment.name
-    missing = [m for m in METHODS if not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()]
+    missing = [m for m in args.methods if not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()]
     if not missing:
         print(f"[{experiment.name}] done earlier")
         return 0
