@@ -182,7 +182,7 @@ def _reproduce_experiment(
     command += ["--demo", str(experiment.demo), "--out", str(method_dir), "--seed", str(args.seed)]
     command += [*chosen.run_flags, *quiet]
     print(f"[{experiment.name}] toolimit {' '.join(command)}")
-    code = toolimit(command)
+    code = _nested(toolimit, command)
     if code != 0:
         print(f"[{experiment.name}] the pipeline stopped (exit {code}): no cells for this experiment")
         return code
@@ -213,12 +213,23 @@ def _reproduce_experiment(
             command = ["learn", "--task", str(task_file), "--out", str(learning), *flags]
             command += [f"--{flag}={learned[flag]}" for flag in ("timesteps", "envs", "preset", "seed")] + quiet
             print(f"[{experiment.name}] toolimit {' '.join(command)}")
-            learned_code = toolimit(command)
+            learned_code = _nested(toolimit, command)
             if learned_code != 0:
                 return learned_code
             cell = measure_policy(experiment, method, learning, episodes, seed)
         save_json(cells_dir / f"{experiment.cell_key(method)}.json", cell.record())
         print(f"[{experiment.name}] {method}: goal reward {cell.goal_reward:.1f}, success {cell.success_rate:.2f}")
+    return code
+
+
+def _nested(toolimit: Callable[[list[str]], int], command: list[str]) -> int:
+    """The exit code of ``toolimit command``; when a signal stopped it (exit 128 + SIGINT or SIGTERM),
+    :class:`~toolimit.interrupts.Interrupted`, so that the whole reproduction stops, not only this step."""
+    from toolimit.interrupts import SIGNALS, Interrupted
+
+    code = toolimit(command)
+    if code - 128 in SIGNALS:
+        raise Interrupted(code - 128)
     return code
 
 
