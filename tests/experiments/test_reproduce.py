@@ -51,8 +51,13 @@ def test_lfd_learns_from_a_scripted_scoop_the_robot_delivers_in_the_methods_scen
         np.testing.assert_array_equal(lfd.params[name], value)
     demonstration = json.loads((folder / SELECTION_JSON).read_text())["candidates"][0]
     assert demonstration["alignment_reward"] >= 10 and demonstration["robot_reward"] >= 10  # tool alone, robot
-    configs = [json.loads((folder / "learning.json").read_text())["config"] for folder in (
-        quick_results / EXPERIMENT / "lfd" / "learning", quick_results / EXPERIMENT / "method" / "learning")]
+    configs = [
+        json.loads((folder / "learning.json").read_text())["config"]
+        for folder in (
+            quick_results / EXPERIMENT / "lfd" / "learning",
+            quick_results / EXPERIMENT / "method" / "learning",
+        )
+    ]
     assert configs[0] == configs[1]  # exactly the method's learning flags
 
 
@@ -106,10 +111,71 @@ def test_a_robot_that_cannot_track_the_scripted_motion_leaves_the_lfd_cell_missi
     assert sorted(cell["method"] for cell in cells) == sorted(set(METHODS) - {"lfd"})
 
 
-def test_a_demonstration_of_an_unknown_tool_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_demonstration_of_an_unknown_tool_is_a_one_line_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     demo = tmp_path / "shovel_00.npz"
     demo.write_bytes(b"")
     assert toolimit(["reproduce", "--demo", str(demo), "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and "must start with one of spade, hammer, scythe" in error
     assert not (tmp_path / "out").exists()
+
+
+def test_methods_measures_only_the_named_cells_and_a_later_run_adds_the_others(
+    quick_results: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "reproduce"
+    shutil.copytree(quick_results, out)
+    for method in ("trajopt", "dense_ppo"):
+        (out / "cells" / f"{EXPERIMENT}-{method}.json").unlink()
+    monkeypatch.chdir(REPO)
+    assert toolimit(["reproduce", "--preset", "quick", "--methods", "dense_ppo", "--out", str(out), "--quiet"]) == 0
+    assert not (out / "cells" / f"{EXPERIMENT}-trajopt.json").exists()
+    assert (out / "cells" / f"{EXPERIMENT}-dense_ppo.json").is_file()
+    assert toolimit(["reproduce", "--preset", "quick", "--out", str(out), "--quiet"]) == 0
+    assert CellResult.load(out / "cells" / f"{EXPERIMENT}-trajopt.json") == CellResult.load(
+        quick_results / "cells" / f"{EXPERIMENT}-trajopt.json"
+    )
+
+
+def test_an_unknown_method_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        toolimit(["reproduce", "--methods", "final,ppo", "--out", str(tmp_path / "out")])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "unknown method(s) ppo" in error
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_interrupted_step_stops_the_whole_reproduction(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from toolimit import cli
+
+    steps: list[list[str]] = []
+    real_main = cli.main
+
+    def interrupted_run(argv: list[str] | None = None) -> int:
+        if argv is not None and argv[0] == "run":
+            steps.append(argv)
+            return 130  # what a nested command returns after Ctrl-C
+        return real_main(argv)
+
+    monkeypatch.setattr(cli, "main", interrupted_run)
+    monkeypatch.chdir(REPO)
+    demos = ["--demo", "data/demos/spade_00.npz", "--demo", "data/demos/spade_01.npz"]
+    assert real_main(["reproduce", *demos, "--out", str(tmp_path / "out"), "--quiet"]) == 130
+    assert len(steps) == 1, "the second experiment started after the first was interrupted"
+    assert "toolimit reproduce: interrupted (SIGINT)" in capsys.readouterr().err
+
+
+def test_the_full_preset_measures_every_method_with_the_panda_and_the_pipeline_with_the_other_robots() -> None:
+    from toolimit.cli.reproduce import preset
+
+    experiments = preset("full").experiments
+    panda = [e for e in experiments if e.robot == "panda"]
+    assert {e.tool for e in panda} == {"spade", "hammer", "scythe"}
+    assert sum(e.tool == "spade" for e in panda) == 6 and all(e.methods == METHODS for e in panda)
+    others = {e.robot: e.methods for e in experiments if e.robot != "panda"}
+    assert others == {"ur5": ("tool_only", "trajopt", "final"), "talos": ("tool_only", "trajopt", "final")}

@@ -50,7 +50,8 @@ def test_panda_limits_match_the_benchmark_problem():
 def test_talos_is_torso_and_right_arm_on_its_legs():
     talos = make_robot("talos")
     assert talos.joint_names == ("torso_1_joint", "torso_2_joint") + tuple(f"arm_right_{i}_joint" for i in range(1, 8))
-    assert talos.base_height == pytest.approx(1.019, abs=0.01)
+    # the scene at knee height (the paper): pelvis 1.019 m above the soles, knee 0.400 m
+    assert talos.base_height == pytest.approx(1.019 - 0.400, abs=0.01)
     # the locked left arm and head do not move the tool; the right hand is on the right (-y)
     position, _ = talos.tool_pose(talos.q_neutral, np.zeros(3))
     assert position[1] < -0.2

@@ -15,8 +15,10 @@ are rewritten after every experiment.
 
 Presets: ``quick`` (the planar spade, tiny budgets: a minute, for CI and a first look), ``planar``
 (the same experiment with ``toolimit run``'s planar budgets: the paper's pattern in a quarter of an
-hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstrations and the authors' real recording,
-the hammer and the scythe on one demonstration each; the default budgets of ``toolimit run``).
+hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstrations and the authors'
+real recording, the hammer and the scythe on one demonstration each, every method; the UR5 and
+Talos with the spade on the real recording, the method's stages only; the default budgets of
+``toolimit run``).
 ``--demo`` replaces the preset's demonstrations and ``--methods`` keeps some of the methods (e.g. the
 method and the sparse baseline first, ``--methods final,sparse_ppo``; the others on a later run into
 the same folder). Exit codes: 0 done, 1 an experiment's pipeline
@@ -34,7 +36,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_output_folder
-from toolimit.experiments.cells import METHODS, CellResult, Experiment
+from toolimit.experiments.cells import METHODS, PIPELINE_METHODS, CellResult, Experiment
 
 if TYPE_CHECKING:
     from toolimit.learn.task import LearningTask
@@ -76,6 +78,9 @@ def preset(name: str) -> Preset:
     spades = [SHIPPED_DEMOS / f"spade_{k:02d}.npz" for k in range(5)] + [REAL_SPADE_RECORDING]
     experiments = [Experiment("spade", "3d", "panda", demo) for demo in spades]
     experiments += [Experiment(tool, "3d", "panda", SHIPPED_DEMOS / f"{tool}_00.npz") for tool in ("hammer", "scythe")]
+    experiments += [
+        Experiment("spade", "3d", robot, REAL_SPADE_RECORDING, methods=PIPELINE_METHODS) for robot in ("ur5", "talos")
+    ]
     return Preset(tuple(experiments), (), episodes=20)
 
 
@@ -173,7 +178,8 @@ def _reproduce_experiment(
     from toolimit.learn.training import LEARNING_JSON
 
     cells_dir, folder = args.out / "cells", args.out / experiment.name
-    missing = [m for m in args.methods if not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()]
+    methods = [m for m in args.methods if m in experiment.methods]
+    missing = [m for m in methods if not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()]
     if not missing:
         print(f"[{experiment.name}] done earlier")
         return 0

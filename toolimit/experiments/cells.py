@@ -33,16 +33,20 @@ import numpy as np
 
 #: The methods of the figure, in its order.
 METHODS = ("tool_only", "trajopt", "final", "sparse_ppo", "dense_ppo", "lfd")
+#: The method's own stages (the paper's three-robot comparison measures these).
+PIPELINE_METHODS = METHODS[:3]
 
 
 @dataclass(frozen=True)
 class Experiment:
-    """One demonstration of one tool, for one robot in one world: a group of the figure."""
+    """One demonstration of one tool, for one robot in one world: a group of the figure, with the
+    methods measured on it (all of them, or the method's stages only for the other robots)."""
 
     tool: str
     world: str
     robot: str
     demo: Path
+    methods: tuple[str, ...] = METHODS
 
     @property
     def name(self) -> str:

@@ -16,8 +16,11 @@ Mount frames (z = approach direction, along the held tool; see :mod:`toolimit.ro
 * ``talos``: example-robot-data's full Talos reduced to its upper body: free-flyer, legs, left arm,
   head and both grippers locked at q0 (free-flyer at the origin); active: torso 1-2 and right arm
   1-7 (9 joints). Flange ``gripper_right_base_link``, approach = its -z axis (towards the
-  fingertips). Rest pose = q0's. Base height = the pelvis height of q0 (1.019 m): the legs stand
-  on the floor.
+  fingertips). Rest pose = q0's. The scene stands at Talos's knee height, as in the paper (its
+  deposit and goal box raised to the knees: with the legs fixed, the arm cannot reach the floor).
+  The scenes' floor is the world's z = 0 (the sand solver's ground), so the robot is lowered
+  instead: the same geometry relative to the scene. Base height = the pelvis height of q0 (1.019 m)
+  less the knee height of q0 above the soles (0.400 m, the right knee joint): 0.619 m.
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ PLANAR3_VELOCITY_LIMIT = 2.5
 PLANAR3_BASE_HEIGHT = 0.5
 UR5_BASE_HEIGHT = 0.4
 UR5_NEUTRAL = (0.0, -1.57, 1.57, -1.57, -1.57, 0.0)
+#: Talos's right knee: the scene's floor stands at its height (module docstring).
+TALOS_KNEE_JOINT = "leg_right_4_joint"
 TALOS_ACTIVE_JOINTS = ("torso_1_joint", "torso_2_joint") + tuple(f"arm_right_{i}_joint" for i in range(1, 8))
 
 
@@ -116,6 +121,7 @@ def talos() -> ArmDescription:
     robot = _load_example_robot("talos")
     q_ref = np.array(robot.q0, dtype=float)
     pelvis_height = float(q_ref[2])
+    knee_height = _height_above_soles(robot, TALOS_KNEE_JOINT)
     q_ref[:7] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]  # free-flyer at the origin (x, y, z, quaternion)
     model = _reduced(robot.model, q_ref, TALOS_ACTIVE_JOINTS)
     q_neutral = np.array(
@@ -127,5 +133,13 @@ def talos() -> ArmDescription:
         flange_frame="gripper_right_base_link",
         mount_rotation=np.diag([1.0, -1.0, -1.0]),
         q_neutral=q_neutral,
-        base_height=pelvis_height,
+        base_height=pelvis_height - knee_height,
     )
+
+
+def _height_above_soles(robot, joint: str) -> float:  # type: ignore[no-untyped-def]
+    """Height (m) of ``joint`` above the right sole in example-robot-data's q0 (standing pose)."""
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, robot.q0)
+    sole = data.oMf[robot.model.getFrameId("right_sole_link")].translation[2]
+    return float(data.oMi[robot.model.getJointId(joint)].translation[2] - sole)
