@@ -179,3 +179,31 @@ def test_the_full_preset_measures_every_method_with_the_panda_and_the_pipeline_w
     assert sum(e.tool == "spade" for e in panda) == 6 and all(e.methods == METHODS for e in panda)
     others = {e.robot: e.methods for e in experiments if e.robot != "panda"}
     assert others == {"ur5": ("tool_only", "trajopt", "final"), "talos": ("tool_only", "trajopt", "final")}
+
+
+def test_jobs_run_experiments_in_child_processes_with_the_same_cells_as_one_process(
+    quick_results: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "reproduce"
+    monkeypatch.chdir(REPO)
+    demos = ["--demo", "data/demos/spade_03.npz", "--demo", "data/demos/spade_01.npz"]
+    methods = ["--methods", "tool_only,trajopt,final"]
+    assert toolimit(["reproduce", "--preset", "quick", *demos, *methods, "--jobs", "2", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    for name in (EXPERIMENT, EXPERIMENT.replace("spade_03", "spade_01")):
+        assert f"[{name}] ended (exit 0)" in said
+        assert f"[{name}] toolimit run" in (out / "logs" / f"{name}.log").read_text()
+    for method in ("tool_only", "trajopt", "final"):
+        key = f"{EXPERIMENT}-{method}.json"
+        alone, in_child = CellResult.load(quick_results / "cells" / key), CellResult.load(out / "cells" / key)
+        np.testing.assert_allclose(in_child.goal_rewards, alone.goal_rewards, rtol=1e-6, atol=1e-6)
+        assert in_child.success_rate == alone.success_rate
+    cells = json.loads((out / "results.json").read_text())["cells"]
+    assert len(cells) == 6
+
+
+def test_an_unknown_experiment_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert toolimit(["reproduce", "--experiment", "spade-3d-kuka-spade_00", "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "unknown spade-3d-kuka-spade_00" in error and "spade-3d-ur5-" in error
+    assert not (tmp_path / "out").exists()

@@ -19,9 +19,11 @@ hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstratio
 real recording, the hammer and the scythe on one demonstration each, every method; the UR5 and
 Talos with the spade on the real recording, the method's stages only; the default budgets of
 ``toolimit run``).
-``--demo`` replaces the preset's demonstrations and ``--methods`` keeps some of the methods (e.g. the
-method and the sparse baseline first, ``--methods final,sparse_ppo``; the others on a later run into
-the same folder). Exit codes: 0 done, 1 an experiment's pipeline
+``--demo`` replaces the preset's demonstrations, ``--experiment`` keeps some of its experiments and
+``--methods`` some of the methods (e.g. the method and the sparse baseline first, ``--methods
+final,sparse_ppo``; the others on a later run into the same folder). ``--jobs N`` runs N experiments
+at a time, each in a child ``toolimit reproduce`` whose output goes to OUT/logs/<experiment>.log
+(the results do not depend on N: every experiment is seeded on its own). Exit codes: 0 done, 1 an experiment's pipeline
 found nothing or its robot cannot track the scripted motion of LfD (those cells are missing from
 the results; a line says why), 2 bad input, 130 interrupted.
 """
@@ -35,7 +37,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_output_folder
+from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_count, check_output_folder
 from toolimit.experiments.cells import METHODS, PIPELINE_METHODS, CellResult, Experiment
 
 if TYPE_CHECKING:
@@ -103,6 +105,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "file name's prefix, spade_..., hammer_..., scythe_...; world and robot are the preset's first)",
     )
     parser.add_argument(
+        "--experiment",
+        action="append",
+        default=None,
+        help="run only the preset's experiment of this name, e.g. spade-3d-ur5-spade_video1_aligned (repeatable)",
+    )
+    parser.add_argument(
         "--methods",
         type=_methods,
         default=METHODS,
@@ -110,6 +118,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     add_out_argument(parser, "output folder (one sub-folder per experiment, cells/, results.*)")
     add_seed_argument(parser)
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="experiments run at a time, each in its own process (default: 1; each also uses its own "
+        "worker processes for stage iii's selection); results do not depend on it",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run)
 
@@ -126,7 +141,8 @@ def _methods(text: str) -> tuple[str, ...]:
 
 
 def _experiments(args: argparse.Namespace, chosen: Preset) -> tuple[Experiment, ...]:
-    """The preset's experiments, or those of ``--demo``; CliError names a missing file or unknown tool."""
+    """The preset's experiments, or those of ``--demo``, kept by ``--experiment``; CliError names a
+    missing file, an unknown tool or an unknown experiment."""
     if args.demo is None:
         experiments = chosen.experiments
     else:
@@ -137,6 +153,12 @@ def _experiments(args: argparse.Namespace, chosen: Preset) -> tuple[Experiment, 
             if demo.stem.split("_")[0] not in TOOLS:
                 raise CliError(f"--demo {demo}: the file name must start with one of {', '.join(TOOLS)} and '_'")
         experiments = tuple(Experiment(d.stem.split("_")[0], first.world, first.robot, d) for d in args.demo)
+    if args.experiment is not None:
+        names = [e.name for e in experiments]
+        unknown = [name for name in args.experiment if name not in names]
+        if unknown:
+            raise CliError(f"--experiment: unknown {', '.join(unknown)}; the preset's: {', '.join(names)}")
+        experiments = tuple(e for e in experiments if e.name in args.experiment)
     for experiment in experiments:
         if not experiment.demo.is_file():
             raise CliError(f"{experiment.name}: no such demonstration file: {experiment.demo}")
@@ -149,17 +171,69 @@ def run(args: argparse.Namespace) -> int:
 
     chosen = preset(args.preset)
     experiments = _experiments(args, chosen)
+    check_count("--jobs", args.jobs)
     check_output_folder(args.out, "--out")
-    cells_dir = args.out / "cells"
     quiet = ["--quiet"] if args.quiet else []
-    code = 0
-    for experiment in experiments:
-        code = max(code, _reproduce_experiment(experiment, chosen, args, toolimit, quiet))
-        cells = [CellResult.load(path) for path in sorted(cells_dir.glob("*.json"))]
-        written = write_results(
+
+    def results() -> list[Path]:
+        cells = [CellResult.load(path) for path in sorted((args.out / "cells").glob("*.json"))]
+        return write_results(
             args.out, cells, {"name": args.preset, "run_flags": list(chosen.run_flags), "seed": args.seed}
         )
-    print(f"wrote {', '.join(str(path) for path in written)}")
+
+    code = 0
+    if args.jobs > 1 and len(experiments) > 1:
+        code = _run_children(experiments, args, results)
+    else:
+        for experiment in experiments:
+            code = max(code, _reproduce_experiment(experiment, chosen, args, toolimit, quiet))
+            results()
+    print(f"wrote {', '.join(str(path) for path in results())}")
+    return code
+
+
+def _run_children(experiments: tuple[Experiment, ...], args: argparse.Namespace, results: Callable[[], object]) -> int:
+    """Each experiment in a child ``toolimit reproduce``, ``args.jobs`` at a time, its output in
+    OUT/logs/<experiment>.log; ``results()`` after each. The children share the terminal's process
+    group, so a Ctrl-C reaches them too: each saves its progress and stops; a signal sent to this
+    process alone is passed on. The exit code: the worst of the children's (an interrupted child
+    interrupts the whole reproduction)."""
+    import subprocess
+    import sys
+    import time
+
+    from toolimit.interrupts import SIGNALS, Interrupted
+
+    logs = args.out / "logs"
+    logs.mkdir(parents=True, exist_ok=True)
+    pending = list(experiments)
+    running: dict[subprocess.Popen[bytes], Experiment] = {}
+    code = 0
+    try:
+        while pending or running:
+            while pending and len(running) < args.jobs:
+                experiment = pending.pop(0)
+                selector = ["--demo", str(experiment.demo)] if args.demo else ["--experiment", experiment.name]
+                command = [sys.executable, "-m", "toolimit", "reproduce", "--preset", args.preset, *selector]
+                command += ["--methods", ",".join(args.methods), "--out", str(args.out), "--seed", str(args.seed)]
+                log = logs / f"{experiment.name}.log"
+                with open(log, "w") as output:
+                    child = subprocess.Popen([*command, "--quiet"], stdout=output, stderr=subprocess.STDOUT)
+                running[child] = experiment
+                print(f"[{experiment.name}] started (log: {log})")
+            time.sleep(0.5)
+            for child in [c for c in running if c.poll() is not None]:
+                experiment = running.pop(child)
+                print(f"[{experiment.name}] ended (exit {child.returncode})")
+                if child.returncode - 128 in SIGNALS:
+                    raise Interrupted(child.returncode - 128)
+                code = max(code, child.returncode)
+                results()
+    finally:
+        for child in running:  # interrupted: pass the signal on, then let each child save and stop
+            child.send_signal(SIGNALS[0])
+        for child in running:
+            child.wait()
     return code
 
 
