@@ -148,8 +148,9 @@ class Scene(Protocol):
 
     def dense_reward(self) -> np.ndarray:
         """(B,) dense shaping reward of the paper's appendix, for the dense-reward baseline: sums
-        of :func:`gaussian_closeness` terms (spade in [0, 1.05], hammer [0, 1], scythe [0, 0.1]),
-        per step, not divided by the horizon (the learning environment does that)."""
+        of :func:`gaussian_closeness` terms (:func:`dense_spade_reward` in [0, 1.05],
+        :func:`dense_hammer_reward` [0, 1], :func:`dense_scythe_reward` [0, 0.1]), per step, not
+        divided by the horizon (the learning environment does that)."""
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
