@@ -9,6 +9,10 @@ from toolimit.scenes.base import (
     ParameterSpec,
     SceneBase,
     SuccessTracker,
+    WindowedGoalScene,
+    dense_hammer_reward,
+    dense_scythe_reward,
+    dense_spade_reward,
     parameter_violation,
     world_position,
 )
@@ -76,3 +80,27 @@ def test_scene_base_checks_the_timing_and_the_parameters_against_the_specs():
     assert (scene.control_dt, scene.substeps, scene.batch_size) == (0.04, 10, 0)
     assert scene.invalid_reason(GOOD) is None
     assert scene.invalid_reason({"yaw": 0.0}) == "missing parameter 'box'"
+
+
+def test_windowed_goal_scene_succeeds_within_its_window_after_a_reset():
+    scene = WindowedGoalScene(control_dt=0.04, substeps=10, success_window=0.5)
+    with pytest.raises(RuntimeError, match="call reset"):
+        scene.is_success()
+    scene.start_instances(2)
+    scene.goal_timer.advance(0.4)
+    scene.goal_timer.record(np.array([True, False]))
+    scene.goal_timer.advance(0.4)
+    scene.goal_timer.record(np.array([True, True]))
+    assert scene.batch_size == 2 and scene.is_success().tolist() == [True, False]
+
+
+def test_dense_rewards_are_the_appendix_closeness_terms():
+    origin, far = np.zeros((2, 3)), np.full((2, 3), 100.0)
+    assert dense_hammer_reward(None, far).tolist() == [0.0, 0.0]
+    assert dense_hammer_reward(origin, origin).tolist() == [1.0, 1.0]
+    stalks = np.zeros((2, 5, 3))
+    assert dense_scythe_reward(None, stalks).tolist() == [0.0, 0.0]
+    np.testing.assert_allclose(dense_scythe_reward(origin, stalks), 0.1)
+    grains, goal = np.zeros((2, 4, 2)), np.zeros((2, 1, 2))
+    np.testing.assert_allclose(dense_spade_reward(grains, goal, None, np.zeros(2)), 1.0)
+    np.testing.assert_allclose(dense_spade_reward(grains, goal, np.zeros((2, 2)), np.zeros(2)), 1.05)

@@ -106,6 +106,12 @@ def check_count(option: str, value: int, minimum: int = 1) -> None:
         raise CliError(f"{option}: must be a {kind} integer, got {value}")
 
 
+def add_scene_arguments(parser: argparse.ArgumentParser, default_world: str) -> None:
+    """``--tool`` and ``--world``: the scene a command works in (checked by :func:`check_scene`)."""
+    add_tool_argument(parser)
+    add_world_argument(parser, default_world)
+
+
 def add_tool_argument(parser: argparse.ArgumentParser) -> None:
     """``--tool`` (required): the tool a command works with."""
     parser.add_argument("--tool", required=True, help="spade, hammer or scythe")

@@ -17,10 +17,9 @@ from pathlib import Path
 from toolimit.cli import (
     CliError,
     add_out_argument,
+    add_scene_arguments,
     add_seed_argument,
-    add_tool_argument,
     add_workers_argument,
-    add_world_argument,
     check_count,
     check_output_file,
     check_output_folder,
@@ -42,8 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Find scene parameters under which a demonstration reaches the goal (stage ii): "
         "writes OUT/alignment.json and OUT/aligned_demo.npz. Exit code 1 when no candidate is found.",
     )
-    add_tool_argument(parser)
-    add_world_argument(parser, "planar")
+    add_scene_arguments(parser, "planar")
     parser.add_argument(
         "--demo",
         required=True,

@@ -25,9 +25,8 @@ import numpy as np
 from toolimit.cli import (
     CliError,
     add_frame_argument,
+    add_scene_arguments,
     add_seed_argument,
-    add_tool_argument,
-    add_world_argument,
     check_count,
     check_scene,
     load_poses,
@@ -49,8 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Replay a tool motion (poses file) tool-only in a scene with given parameters, "
         "several times, and report the goal reward each replay earned.",
     )
-    add_tool_argument(parser)
-    add_world_argument(parser, "3d")
+    add_scene_arguments(parser, "3d")
     parser.add_argument("--poses", required=True, type=Path, help=".npz with tip_position, tip_quaternion_wxyz, fps")
     add_frame_argument(parser)
     source = parser.add_mutually_exclusive_group(required=True)

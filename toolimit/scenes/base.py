@@ -148,8 +148,9 @@ class Scene(Protocol):
 
     def dense_reward(self) -> np.ndarray:
         """(B,) dense shaping reward of the paper's appendix, for the dense-reward baseline: sums
-        of :func:`gaussian_closeness` terms (spade in [0, 1.05], hammer [0, 1], scythe [0, 0.1]),
-        per step, not divided by the horizon (the learning environment does that)."""
+        of :func:`gaussian_closeness` terms (:func:`dense_spade_reward` in [0, 1.05],
+        :func:`dense_hammer_reward` [0, 1], :func:`dense_scythe_reward` [0, 0.1]), per step, not
+        divided by the horizon (the learning environment does that)."""
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
@@ -228,7 +229,58 @@ def gaussian_closeness(distance_squared: np.ndarray) -> np.ndarray:
     return np.exp(-0.5 * DENSE_REWARD_B * np.asarray(distance_squared, dtype=float))
 
 
-def require_reset(scene: Scene) -> None:
+def dense_hammer_reward(tool_origin: np.ndarray | None, nail_top: np.ndarray) -> np.ndarray:
+    """(B,) the appendix's hammer shaping, in [0, 1]: the closeness of the tool frame origin (the
+    hammer head's centre) to the nail head's top centre; 0 before the hammer is placed.
+
+    Args:
+        tool_origin: (B, D) tool frame origins, None before the first step.
+        nail_top: (B, D) nail head top centres where the nails are now.
+        Both in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
+    """
+    if tool_origin is None:
+        return np.zeros(len(nail_top))
+    return gaussian_closeness(np.sum((tool_origin - nail_top) ** 2, axis=-1))
+
+
+def dense_scythe_reward(tool_origin: np.ndarray | None, stalks: np.ndarray) -> np.ndarray:
+    """(B,) the appendix's scythe shaping, in [0, 0.1]: :data:`DENSE_SCYTHE_WEIGHT` times the mean
+    over all stalks (cut or not) of the closeness of the tool frame origin (the blade root) to a
+    stalk's point; 0 before the scythe is placed.
+
+    Args:
+        tool_origin: (B, D) tool frame origins, None before the first step.
+        stalks: (B, N, D) one point of each stalk.
+        Both in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
+    """
+    if tool_origin is None:
+        return np.zeros(len(stalks))
+    closeness = gaussian_closeness(np.sum((stalks - tool_origin[:, None, :]) ** 2, axis=-1))
+    return DENSE_SCYTHE_WEIGHT * closeness.mean(axis=1)
+
+
+def dense_spade_reward(
+    grains: np.ndarray, goal: np.ndarray, tool_origin: np.ndarray | None, deposit: np.ndarray
+) -> np.ndarray:
+    """(B,) the appendix's spade shaping, in [0, 1.05]: the mean over the sand grains of their
+    closeness to the goal point, plus :data:`DENSE_SPADE_TOOL_WEIGHT` times the closeness of the
+    tool frame origin (the blade tip) to the deposit (no tool term before the spade is placed).
+
+    Args:
+        grains: (B, N, D) sand grain (circle or sphere) centres.
+        goal: (B, 1, D) the goal box's centre at grain-radius height (where a delivered grain rests).
+        tool_origin: (B, D) tool frame origins, None before the first step.
+        deposit: (D,) the deposit's floor centre.
+        All in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
+    """
+    sand_term = gaussian_closeness(np.sum((grains - goal) ** 2, axis=-1)).mean(axis=1)
+    if tool_origin is None:
+        return sand_term
+    tool_term = gaussian_closeness(np.sum((tool_origin - deposit) ** 2, axis=-1))
+    return sand_term + DENSE_SPADE_TOOL_WEIGHT * tool_term
+
+
+def require_reset(scene: Scene | SceneBase) -> None:
     """RuntimeError unless ``scene`` was reset (its batch size is 0 until then)."""
     if scene.batch_size == 0:
         raise RuntimeError(f"{type(scene).__name__}: call reset() first")
@@ -276,6 +328,34 @@ class GoalTimer:
     def within(self, window: float) -> np.ndarray:
         """(B,) bool: the goal was met at most ``window`` seconds after the clock's start."""
         return self.met_at <= window + 1e-9
+
+
+class WindowedGoalScene(SceneBase):
+    """A scene that succeeds where its goal was met within ``success_window`` seconds of the start
+    of its clock (the hammers and the scythes: the paper's "within the first second", DESIGN.md).
+
+    The subclass starts the clock, :attr:`goal_timer`, with the first ``step`` after ``reset`` (each
+    scene says at which instant), advances it and records when the goal is met.
+
+    Args:
+        control_dt, substeps: see :class:`SceneBase`.
+        success_window: the goal must be met within this many seconds of the clock's start, s.
+    """
+
+    def __init__(self, control_dt: float, substeps: int, success_window: float) -> None:
+        super().__init__(control_dt, substeps)
+        self.success_window = float(success_window)
+        self.goal_timer = GoalTimer(0)  # replaced by reset
+
+    def start_instances(self, batch_size: int) -> None:
+        """For ``reset``: B instances, none of which has met its goal, on a clock at 0."""
+        self.batch_size = batch_size
+        self.goal_timer = GoalTimer(batch_size)
+
+    def is_success(self) -> np.ndarray:
+        """(B,) bool: the goal was met within ``success_window`` s of the clock's start."""
+        require_reset(self)
+        return self.goal_timer.within(self.success_window)
 
 
 def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:

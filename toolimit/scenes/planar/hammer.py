@@ -38,12 +38,10 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    GoalTimer,
-    ParameterSpec,
-    SceneBase,
     SceneParams,
+    WindowedGoalScene,
     check_reset,
-    gaussian_closeness,
+    dense_hammer_reward,
     require_reset,
     world_position,
 )
@@ -58,18 +56,18 @@ BOARD_HALF_LENGTH = 0.15
 SHANK_EMBEDDED = 0.02
 
 
-class PlanarHammerScene(SceneBase):
+class PlanarHammerScene(WindowedGoalScene):
     """B instances of the planar hammer world; see the module docstring for geometry and rewards.
 
     Args:
-        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
+        control_dt, success_window: see :class:`~toolimit.scenes.base.WindowedGoalScene`; the
+            nail must be planted within ``success_window`` s of the first step's start.
         substeps: physics sub-steps per control step (20 at 24 Hz = 480 Hz).
         protrusion: nail travel from its start to fully planted, m (0 < protrusion <= 0.1).
         nail_mass: kg. friction_force: maximum entry friction force, N.
         nail_head_width, nail_head_thickness, nail_shank_width: nail dimensions, m.
         head_depth: hammer head extent along the tool's y axis, m. handle_radius: m.
         planted_tolerance: travel left (m) below which the nail counts as planted.
-        success_window: time (s) from the first step within which the nail must be planted.
     """
 
     tool = "hammer"
@@ -90,7 +88,7 @@ class PlanarHammerScene(SceneBase):
         planted_tolerance: float = 0.001,
         success_window: float = 1.0,
     ):
-        super().__init__(control_dt, substeps)
+        super().__init__(control_dt, substeps, success_window)
         if not 0.0 < protrusion <= 0.1:
             raise ValueError(f"protrusion must be in (0, 0.1] m, got {protrusion}")
         self.protrusion = float(protrusion)
@@ -101,13 +99,12 @@ class PlanarHammerScene(SceneBase):
         self.nail_shank_width = float(nail_shank_width)
         self.handle_radius = float(handle_radius)
         self.planted_tolerance = float(planted_tolerance)
-        self.success_window = float(success_window)
         spec = tool_spec("hammer")
         half = np.array([spec.head_width, head_depth, spec.head_length]) / 2.0
         corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
         self._head_corners = corners  # (8, 3) tool frame, m
         self._handle_points = np.array([[0.0, 0.0, half[2]], [0.0, 0.0, spec.length]])  # (2, 3)
-        self.parameters: tuple[ParameterSpec, ...] = (
+        self.parameters = (
             world_position(
                 "nail_position",
                 f"top of the nail head; the board surface is {self.protrusion * 1000:.0f} mm below",
@@ -124,7 +121,6 @@ class PlanarHammerScene(SceneBase):
         self._nails: list[pymunk.Body] = []
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
         self._tool_shapes: list[tuple[pymunk.Poly, pymunk.Segment]] = []
-        self.goal_timer = GoalTimer(0)  # from the start of the first step
 
     # ----------------------------------------------------------------------------------- parameters
     # ----------------------------------------------------------------------------------- reset/step
@@ -140,7 +136,6 @@ class PlanarHammerScene(SceneBase):
             space.collision_slop = 0.0002
             self._nails.append(self._add_nail(space))
             self._spaces.append(space)
-        self.batch_size = batch_size
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
         self._tool_shapes = []
         for body in self._tool.bodies:
@@ -149,7 +144,7 @@ class PlanarHammerScene(SceneBase):
             for shape in (head, handle):
                 shape.friction = 0.5
             self._tool_shapes.append((head, handle))
-        self.goal_timer = GoalTimer(batch_size)
+        self.start_instances(batch_size)  # the clock starts with the first step
 
     def _add_nail(self, space: pymunk.Space) -> pymunk.Body:
         """The nail body with its guide and friction joints; body origin = head top, plane m."""
@@ -208,15 +203,8 @@ class PlanarHammerScene(SceneBase):
         """(B,) the paper appendix's closeness of the hammer head to the nail head's top centre
         (module docstring), in [0, 1]; 0 before the first step."""
         require_reset(self)
-        if not self._tool.placed:
-            return np.zeros(self.batch_size)
         nail_top = np.stack([np.full(self.batch_size, self.nail_start[0]), self.nail_start[1] - self.travel()], -1)
-        return gaussian_closeness(np.sum((self._tool.position - nail_top) ** 2, axis=-1))
-
-    def is_success(self) -> np.ndarray:
-        """(B,) the nail was planted within ``success_window`` s of the first step's start."""
-        require_reset(self)
-        return self.goal_timer.within(self.success_window)
+        return dense_hammer_reward(self._tool.position if self._tool.placed else None, nail_top)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -34,13 +34,10 @@ import pymunk
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    DENSE_SCYTHE_WEIGHT,
-    GoalTimer,
-    ParameterSpec,
-    SceneBase,
     SceneParams,
+    WindowedGoalScene,
     check_reset,
-    gaussian_closeness,
+    dense_scythe_reward,
     require_counts,
     require_positive,
     require_reset,
@@ -50,15 +47,15 @@ from toolimit.scenes.planar.kinematic_tool import KinematicTool
 from toolimit.tools import ToolPose, tool_spec
 
 
-class PlanarScytheScene(SceneBase):
+class PlanarScytheScene(WindowedGoalScene):
     """B instances of the planar scythe world; see the module docstring for the cut test.
 
     Args:
-        control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
+        control_dt, success_window: see :class:`~toolimit.scenes.base.WindowedGoalScene`; every
+            stalk must be cut within ``success_window`` s of the first step's start.
         substeps: cut-test sub-intervals per control step (10 at 24 Hz = 240 Hz).
         stalk_count: stalks in the patch. patch_diameter: m. stalk_radius: m.
         max_cut_height: highest blade height (m) that cuts. min_cut_speed: slowest cut, m/s.
-        success_window: time (s) from the first step within which every stalk must be cut.
     """
 
     tool = "scythe"
@@ -75,7 +72,7 @@ class PlanarScytheScene(SceneBase):
         min_cut_speed: float = 1.0,
         success_window: float = 1.0,
     ):
-        super().__init__(control_dt, substeps)
+        super().__init__(control_dt, substeps, success_window)
         require_counts(stalk_count=stalk_count)
         require_positive(patch_diameter=patch_diameter)
         self.stalk_count = int(stalk_count)
@@ -83,9 +80,8 @@ class PlanarScytheScene(SceneBase):
         self.stalk_radius = float(stalk_radius)
         self.max_cut_height = float(max_cut_height)
         self.min_cut_speed = float(min_cut_speed)
-        self.success_window = float(success_window)
         self._blade_points = np.array([[0.0, 0.0, 0.0], [tool_spec("scythe").head_width, 0.0, 0.0]])  # tool frame
-        self.parameters: tuple[ParameterSpec, ...] = (
+        self.parameters = (
             world_position(
                 "grass_position",
                 f"centre of the {self.patch_diameter:.2f} m grass patch on the ground (x, y used)",
@@ -98,7 +94,6 @@ class PlanarScytheScene(SceneBase):
         self.cut = np.zeros((0, self.stalk_count), dtype=bool)  # (B, M)
         self._spaces: list[pymunk.Space] = []
         self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
-        self.goal_timer = GoalTimer(0)  # from the start of the first step
 
     # ----------------------------------------------------------------------------------- parameters
     # ----------------------------------------------------------------------------------- reset/step
@@ -114,8 +109,7 @@ class PlanarScytheScene(SceneBase):
         self.cut = np.zeros((batch_size, self.stalk_count), dtype=bool)
         self._spaces = [pymunk.Space() for _ in range(batch_size)]
         self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
-        self.batch_size = batch_size
-        self.goal_timer = GoalTimer(batch_size)
+        self.start_instances(batch_size)  # the clock starts with the first step
 
     def step(self, tool_pose: ToolPose) -> None:
         """Move the blade to ``tool_pose`` over ``control_dt`` and cut what it sweeps."""
@@ -181,15 +175,7 @@ class PlanarScytheScene(SceneBase):
         """(B,) the paper appendix's closeness of the blade root to the stalks (module docstring),
         in [0, 0.1]; 0 before the first step."""
         require_reset(self)
-        if not self._tool.placed:
-            return np.zeros(self.batch_size)
-        closeness = gaussian_closeness(np.sum((self.stalks - self._tool.position[:, None, :]) ** 2, axis=-1))
-        return DENSE_SCYTHE_WEIGHT * closeness.mean(axis=1)
-
-    def is_success(self) -> np.ndarray:
-        """(B,) every stalk was cut within ``success_window`` s of the first step's start."""
-        require_reset(self)
-        return self.goal_timer.within(self.success_window)
+        return dense_scythe_reward(self._tool.position if self._tool.placed else None, self.stalks)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -45,13 +45,11 @@ import pymunk.batch
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    DENSE_SPADE_TOOL_WEIGHT,
-    ParameterSpec,
     SceneBase,
     SceneParams,
     SuccessTracker,
     check_reset,
-    gaussian_closeness,
+    dense_spade_reward,
     instance_positions,
     parameter_violation,
     require_counts,
@@ -140,7 +138,7 @@ class PlanarSpadeScene(SceneBase):
         self.sleeping = bool(sleeping)
         spec = tool_spec("spade")
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
-        self.parameters: tuple[ParameterSpec, ...] = (
+        self.parameters = (
             world_position("sand_position", "centre of the sand deposit tray on the ground (x used)", axes=(0,)),
             world_position(
                 "goal_position", "centre of the open goal box on the ground (x used)", axes=(0,), per_instance=True
@@ -307,12 +305,8 @@ class PlanarSpadeScene(SceneBase):
         (module docstring), in [0, 1.05]."""
         require_reset(self)
         goal = np.stack([self._box_x, np.full(self.batch_size, self.sand.radius)], -1)  # (B, 2) plane x-z, m
-        sand_term = gaussian_closeness(np.sum((self._sand - goal[:, None, :]) ** 2, axis=-1)).mean(axis=1)
-        if not self._tool.placed:
-            return sand_term
-        deposit = np.array([self.sand_x, 0.0])
-        tool_term = gaussian_closeness(np.sum((self._tool.position - deposit) ** 2, axis=-1))
-        return sand_term + DENSE_SPADE_TOOL_WEIGHT * tool_term
+        tool = self._tool.position if self._tool.placed else None
+        return dense_spade_reward(self._sand, goal[:, None, :], tool, np.array([self.sand_x, 0.0]))
 
     def is_success(self) -> np.ndarray:
         """(B,) >= success_count circles in the box for at least half of the steps since reset."""

@@ -31,12 +31,10 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    GoalTimer,
-    ParameterSpec,
-    SceneBase,
     SceneParams,
+    WindowedGoalScene,
     check_reset,
-    gaussian_closeness,
+    dense_hammer_reward,
     require_positive,
     require_reset,
     world_position,
@@ -70,7 +68,7 @@ def box_surface_points(half_extents: np.ndarray, per_edge: int = 5) -> np.ndarra
     return unit * np.asarray(half_extents, dtype=float)
 
 
-class SpatialHammerScene(SceneBase):
+class SpatialHammerScene(WindowedGoalScene):
     """Batched 3D nail-hammering scene (see the module docstring for the physics).
 
     Args:
@@ -83,10 +81,9 @@ class SpatialHammerScene(SceneBase):
         entry_deceleration: deceleration of the moving nail by the wood, m/s^2.
         restitution: e; the struck nail leaves at (1 + e) times the face's downward speed.
         planted_tolerance: the nail is planted when less than this is left, m.
-        success_window: the nail must be planted within this many seconds of the tool's placement
-            (the first ``step``, time 0) for success (the paper: "within the first second"); as in
-            the planar worlds.
-        substeps, control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
+        success_window, substeps, control_dt: see :class:`~toolimit.scenes.base.WindowedGoalScene`;
+            the nail must be planted within ``success_window`` s of the tool's placement (the first
+            ``step``, time 0).
     """
 
     tool = "hammer"
@@ -108,7 +105,7 @@ class SpatialHammerScene(SceneBase):
         substeps: int = 10,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
-        super().__init__(control_dt, substeps)
+        super().__init__(control_dt, substeps, success_window)
         require_positive(
             protrusion=protrusion,
             guide_travel=guide_travel,
@@ -135,12 +132,11 @@ class SpatialHammerScene(SceneBase):
         self.entry_deceleration = float(entry_deceleration)
         self.restitution = float(restitution)
         self.planted_tolerance = float(planted_tolerance)
-        self.success_window = float(success_window)
         head = tool_boxes("hammer")[0]
         #: (P, 3) points on the hammer head box's surface (tool_geometry's head box), tool frame, m.
         self.head_points = head.center + box_surface_points(head.half_extents) @ head.rotation.T
         lowest_head_top = self.plate_thickness + self.protrusion
-        self.parameters: tuple[ParameterSpec, ...] = (
+        self.parameters = (
             world_position(
                 "nail_position",
                 f"initial top of the nail head (the board's top is {lowest_head_top * 1000:.0f} mm below it)",
@@ -154,7 +150,6 @@ class SpatialHammerScene(SceneBase):
         self._start_top = 0.0
         self.nail_top = np.zeros(0)  # (B,) z of the head top, m
         self.nail_speed = np.zeros(0)  # (B,) downward speed, m/s
-        self.goal_timer = GoalTimer(0)  # planted, s since the tool was placed
         self._tool = SweptTool(0)
 
     # ----------------------------------------------------------------------------- parameters
@@ -165,14 +160,12 @@ class SpatialHammerScene(SceneBase):
         """
         batch_size = check_reset(self, params, batch_size)
         position = np.asarray(params["nail_position"], dtype=float)
-        self.batch_size = batch_size
+        self.start_instances(batch_size)  # the clock starts at the tool's placement
         self._nail_xy = position[:2].copy()
         self._start_top = float(position[2])
-        b = self.batch_size
-        self.nail_top = np.full(b, self._start_top)
-        self.nail_speed = np.zeros(b)
-        self.goal_timer = GoalTimer(b)
-        self._tool = SweptTool(b)
+        self.nail_top = np.full(batch_size, self._start_top)
+        self.nail_speed = np.zeros(batch_size)
+        self._tool = SweptTool(batch_size)
 
     # ---------------------------------------------------------------------------- geometry
     @property
@@ -257,14 +250,8 @@ class SpatialHammerScene(SceneBase):
     def dense_reward(self) -> np.ndarray:
         """(B,) the paper appendix's closeness of the hammer head to the nail head's top centre
         (module docstring), in [0, 1]; 0 before the tool is placed."""
-        if self._tool.position is None:
-            return np.zeros(self.batch_size)
         nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), self.nail_top])
-        return gaussian_closeness(np.sum((self._tool.position - nail_head) ** 2, axis=-1))
-
-    def is_success(self) -> np.ndarray:
-        """(B,) planted within ``success_window`` seconds of the tool's placement."""
-        return self.goal_timer.within(self.success_window)
+        return dense_hammer_reward(self._tool.position, nail_head)
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -29,13 +29,11 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    DENSE_SCYTHE_WEIGHT,
-    GoalTimer,
     ParameterSpec,
-    SceneBase,
     SceneParams,
+    WindowedGoalScene,
     check_reset,
-    gaussian_closeness,
+    dense_scythe_reward,
     require_counts,
     require_positive,
     require_reset,
@@ -95,7 +93,7 @@ def edge_crossings(
     return fraction, along, height
 
 
-class SpatialScytheScene(SceneBase):
+class SpatialScytheScene(WindowedGoalScene):
     """Batched 3D grass-mowing scene (see the module docstring for the cutting model).
 
     Args:
@@ -105,10 +103,9 @@ class SpatialScytheScene(SceneBase):
         stalk_height: stalk height, m.
         max_cut_height: z_max, a stalk is cut only below this height, m.
         min_cut_speed: v_min, minimum edge speed along the cutting direction, m/s.
-        success_window: every stalk must be cut within this many seconds of the tool's placement
-            (the first ``step``, time 0) for success (the paper: "within the first second"); as in
-            the planar worlds.
-        substeps, control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
+        success_window, substeps, control_dt: see :class:`~toolimit.scenes.base.WindowedGoalScene`;
+            every stalk must be cut within ``success_window`` s of the tool's placement (the first
+            ``step``, time 0).
     """
 
     tool = "scythe"
@@ -126,7 +123,7 @@ class SpatialScytheScene(SceneBase):
         substeps: int = 10,
         control_dt: float = 1.0 / CONTROL_FPS,
     ) -> None:
-        super().__init__(control_dt, substeps)
+        super().__init__(control_dt, substeps, success_window)
         require_positive(
             patch_length=patch_size[0],
             patch_width=patch_size[1],
@@ -143,13 +140,12 @@ class SpatialScytheScene(SceneBase):
         self.stalk_height = float(stalk_height)
         self.max_cut_height = float(max_cut_height)
         self.min_cut_speed = float(min_cut_speed)
-        self.success_window = float(success_window)
         blade = tool_boxes("scythe")[0]
         extent = np.abs(blade.rotation[0]) @ blade.half_extents  # half extent along tool x, m
         #: (2, 3) edge root and tip in the tool frame, m.
         self.edge = np.array([[blade.center[0] - extent, 0.0, 0.0], [blade.center[0] + extent, 0.0, 0.0]])
         self.blade_length = 2.0 * extent
-        self.parameters: tuple[ParameterSpec, ...] = (
+        self.parameters = (
             world_position(
                 "grass_position",
                 "centre of the grass patch on the ground",
@@ -165,14 +161,13 @@ class SpatialScytheScene(SceneBase):
         self.stalks_xy = np.zeros((0, self.n_stalks, 2))  # (B, N, 2) stalk positions on the ground, world x-y, m
         self.cut = np.zeros((0, self.n_stalks), dtype=bool)  # (B, N)
         self.cut_time = np.zeros((0, self.n_stalks))  # (B, N) s since the tool was placed
-        self.goal_timer = GoalTimer(0)  # every stalk cut, s since the tool was placed
         self._tool = SweptTool(0)
 
     # ----------------------------------------------------------------------------- parameters
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Scatter B patches of stalks (each from ``rng``); the scythe is absent until ``step``."""
-        batch_size = check_reset(self, params, batch_size)
-        self.batch_size = b = batch_size
+        b = check_reset(self, params, batch_size)
+        self.start_instances(b)  # the clock starts at the tool's placement
         self.grass_position = np.asarray(params["grass_position"], dtype=float).copy()
         self.grass_yaw = float(np.asarray(params["grass_yaw"], dtype=float))
         half = np.array(self.patch_size) / 2
@@ -182,7 +177,6 @@ class SpatialScytheScene(SceneBase):
         self.stalks_xy = self.grass_position[:2] + local @ turn.T
         self.cut = np.zeros((b, self.n_stalks), dtype=bool)
         self.cut_time = np.full((b, self.n_stalks), np.inf)
-        self.goal_timer = GoalTimer(b)
         self._tool = SweptTool(b)
 
     # -------------------------------------------------------------------------------- physics
@@ -250,16 +244,9 @@ class SpatialScytheScene(SceneBase):
     def dense_reward(self) -> np.ndarray:
         """(B,) the paper appendix's closeness of the blade root to the stalks at half the cutting
         height (module docstring), in [0, 0.1]; 0 before the tool is placed."""
-        if self._tool.position is None:
-            return np.zeros(self.batch_size)
         height = np.full(self.stalks_xy.shape[:2] + (1,), min(self.max_cut_height, self.stalk_height) / 2)
         targets = np.concatenate([self.stalks_xy, height], axis=-1)  # (B, N, 3)
-        closeness = gaussian_closeness(np.sum((targets - self._tool.position[:, None, :]) ** 2, axis=-1))
-        return DENSE_SCYTHE_WEIGHT * closeness.mean(axis=1)
-
-    def is_success(self) -> np.ndarray:
-        """(B,) every stalk cut within ``success_window`` seconds of the tool's placement."""
-        return self.goal_timer.within(self.success_window)
+        return dense_scythe_reward(self._tool.position, targets)
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -70,14 +70,13 @@ import numpy as np
 
 from toolimit.scenes.base import (
     CONTROL_FPS,
-    DENSE_SPADE_TOOL_WEIGHT,
     ParameterSpec,
     SceneBase,
     SceneParams,
     SuccessTracker,
     batched_pose,
     check_reset,
-    gaussian_closeness,
+    dense_spade_reward,
     parameter_violation,
     world_position,
 )
@@ -226,7 +225,7 @@ class SpatialSpadeScene(SceneBase):
         self.n_spheres = int(n_spheres)
         self.material = material
         self.shapes = tool_shapes("spade")
-        self.parameters: tuple[ParameterSpec, ...] = (
+        self.parameters = (
             world_position("sand_position", "centre of the sand deposit's floor", axes=(0, 1)),
             ParameterSpec(
                 "sand_yaw",
@@ -388,11 +387,7 @@ class SpatialSpadeScene(SceneBase):
         (module docstring), in [0, 1.05]."""
         world = self._require_reset()
         goal = self.goal_position[:, None] + np.array([0.0, 0.0, self.material.radius])
-        sand_term = gaussian_closeness(np.sum((world.positions - goal) ** 2, axis=-1)).mean(axis=1)
-        if world.tool_position is None:
-            return sand_term
-        tool_term = gaussian_closeness(np.sum((world.tool_position - self.sand_position) ** 2, axis=-1))
-        return sand_term + DENSE_SPADE_TOOL_WEIGHT * tool_term
+        return dense_spade_reward(world.positions, goal, world.tool_position, self.sand_position)
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: >= 10 spheres in the box during at least half of the steps so far."""
