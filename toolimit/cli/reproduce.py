@@ -23,9 +23,9 @@ Talos with the spade on the real recording, the method's stages only; the defaul
 ``--methods`` some of the methods (e.g. the method and the sparse baseline first, ``--methods
 final,sparse_ppo``; the others on a later run into the same folder). ``--jobs N`` runs N experiments
 at a time, each in a child ``toolimit reproduce`` whose output goes to OUT/logs/<experiment>.log
-(the results do not depend on N: every experiment is seeded on its own). Exit codes: 0 done, 1 an experiment's pipeline
-found nothing or its robot cannot track the scripted motion of LfD (those cells are missing from
-the results; a line says why), 2 bad input, 130 interrupted.
+(the results do not depend on N: every experiment is seeded on its own). Exit codes: 0 done, 1 an
+experiment's pipeline found nothing or its robot cannot track the scripted motion of LfD (those
+cells are missing from the results; a line says why), 2 bad input, 130 interrupted.
 """
 
 from __future__ import annotations
