@@ -163,3 +163,11 @@ def test_heat_map_values_come_from_rollouts_and_the_svg_has_one_cell_per_grid_po
     cells = [e for e in root.iter("{http://www.w3.org/2000/svg}rect") if e.get("class") == "cell"]
     assert len(cells) == heat_map.goal_rewards.size
     assert heat_map.record()["goal_rewards"][0][2] is None
+    # the grid spans 1.5 x the rectangle: the outer cells (0.75 m from the aligned box) lie outside it
+    succeeded = int(heat_map.successes[0, 1] >= 0.5) + int(heat_map.successes[0, 0] >= 0.5)
+    assert heat_map.counts() == {
+        "standing": 2,
+        "succeeding": succeeded,
+        "standing_in_rectangle": 1,
+        "succeeding_in_rectangle": int(heat_map.successes[0, 1] >= 0.5),
+    }

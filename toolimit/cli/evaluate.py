@@ -105,5 +105,10 @@ def _heat_map(args: argparse.Namespace, task: LearningTask) -> dict:
     save_text(args.heat_map, heat_map_svg(heat_map, f"{task.robot} {task.tool} ({task.world}), policy {kind}"))
     if args.rerun is not None:
         save_heat_map_recording(heat_map, args.rerun)
-    print(f"heat map over {heat_map.goal_rewards.size} box positions: wrote {args.heat_map}")
+    counts = heat_map.counts()
+    print(
+        f"heat map over {heat_map.goal_rewards.size} box positions: the box can stand at {counts['standing']}, "
+        f"the policy succeeds at {counts['succeeding']} ({counts['succeeding_in_rectangle']} of "
+        f"{counts['standing_in_rectangle']} inside the ADR rectangle); wrote {args.heat_map}"
+    )
     return heat_map.record()

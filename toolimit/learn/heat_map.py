@@ -68,8 +68,25 @@ class HeatMap:
         """(nx,), (ny,) the cells' box x and y, m."""
         return (self.x_edges[:-1] + self.x_edges[1:]) / 2, (self.y_edges[:-1] + self.y_edges[1:]) / 2
 
+    def counts(self) -> dict[str, int]:
+        """How many cells the box can stand in (``standing``) and, of those, how many the policy
+        succeeds in (``succeeding``: success in at least half of the cell's episodes); the same
+        inside the ADR rectangle (``*_in_rectangle``: cell centres within it, 1 mm tolerance)."""
+        xs, ys = self.centres
+        x, y = np.meshgrid(xs, ys)
+        low, high = self.rectangle - 1e-3, self.rectangle + 1e-3
+        inside = (low[0, 0] <= x) & (x <= high[1, 0]) & (low[0, 1] <= y) & (y <= high[1, 1])
+        standing = ~np.isnan(self.successes)
+        succeeding = standing & (np.nan_to_num(self.successes) >= 0.5)
+        return {
+            "standing": int(standing.sum()),
+            "succeeding": int(succeeding.sum()),
+            "standing_in_rectangle": int((standing & inside).sum()),
+            "succeeding_in_rectangle": int((succeeding & inside).sum()),
+        }
+
     def record(self) -> dict[str, Any]:
-        """JSON-ready (NaN cells as null)."""
+        """JSON-ready (NaN cells as null), with :meth:`counts`."""
 
         def listed(values: np.ndarray) -> list:
             return [[None if np.isnan(v) else float(v) for v in row] for row in values]
@@ -85,6 +102,7 @@ class HeatMap:
             "reach_m": self.reach,
             "episodes": self.episodes,
             "observes_box": self.observes_box,
+            **self.counts(),
         }
 
 
