@@ -74,8 +74,8 @@ class HeatMap:
         inside the ADR rectangle (``*_in_rectangle``: cell centres within it, 1 mm tolerance)."""
         xs, ys = self.centres
         x, y = np.meshgrid(xs, ys)
-        low, high = self.rectangle - 1e-3, self.rectangle + 1e-3
-        inside = (low[0, 0] <= x) & (x <= high[1, 0]) & (low[0, 1] <= y) & (y <= high[1, 1])
+        low, high = self.rectangle[0] - 1e-3, self.rectangle[1] + 1e-3
+        inside = (low[0] <= x) & (x <= high[0]) & (low[1] <= y) & (y <= high[1])
         standing = ~np.isnan(self.successes)
         succeeding = standing & (np.nan_to_num(self.successes) >= 0.5)
         return {
