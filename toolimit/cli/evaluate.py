@@ -105,10 +105,10 @@ def _heat_map(args: argparse.Namespace, task: LearningTask) -> dict:
     save_text(args.heat_map, heat_map_svg(heat_map, f"{task.robot} {task.tool} ({task.world}), policy {kind}"))
     if args.rerun is not None:
         save_heat_map_recording(heat_map, args.rerun)
-    counts = heat_map.counts()
+    record = heat_map.record()
     print(
-        f"heat map over {heat_map.goal_rewards.size} box positions: the box can stand at {counts['standing']}, "
-        f"the policy succeeds at {counts['succeeding']} ({counts['succeeding_in_rectangle']} of "
-        f"{counts['standing_in_rectangle']} inside the ADR rectangle); wrote {args.heat_map}"
+        f"heat map over {heat_map.goal_rewards.size} box positions: the box can stand at {record['standing']}, "
+        f"the policy succeeds at {record['succeeding']} ({record['succeeding_in_rectangle']} of "
+        f"{record['standing_in_rectangle']} inside the ADR rectangle); wrote {args.heat_map}"
     )
-    return heat_map.record()
+    return record

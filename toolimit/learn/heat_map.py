@@ -77,7 +77,7 @@ class HeatMap:
         low, high = self.rectangle[0] - 1e-3, self.rectangle[1] + 1e-3
         inside = (low[0] <= x) & (x <= high[0]) & (low[1] <= y) & (y <= high[1])
         standing = ~np.isnan(self.successes)
-        succeeding = standing & (np.nan_to_num(self.successes) >= 0.5)
+        succeeding = self.successes >= 0.5  # False where NaN (the box cannot stand)
         return {
             "standing": int(standing.sum()),
             "succeeding": int(succeeding.sum()),
