@@ -42,3 +42,8 @@ class SolverFailure(ToolimitError, RuntimeError):
 
 class NoScriptedMotion(InputError):
     """A scene has no hand-made solving motion (the LfD baseline's kinesthetic demonstration)."""
+
+
+class NoKinestheticDemonstration(ToolimitError, ValueError):
+    """The robot tracking a scene's hand-made motion earns nothing at any pace tried: there is no
+    kinesthetic demonstration of the task to learn from (the LfD baseline)."""

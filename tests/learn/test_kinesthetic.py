@@ -1,4 +1,5 @@
-"""The LfD baseline's kinesthetic demonstration: the scripted scoop tracked by the planar arm."""
+"""The LfD baseline's kinesthetic demonstration: a scripted motion tracked by the robot (the planar
+arm's scoop; the Panda's hammer strikes, which it can follow only slower)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from toolimit.errors import BaseInsideFootprint
-from toolimit.learn import LearningTask
-from toolimit.learn.kinesthetic import SELECTION_JSON, kinesthetic_task
+from toolimit.errors import BaseInsideFootprint, NoKinestheticDemonstration
+from toolimit.learn import LearningTask, shipped_task
+from toolimit.learn.kinesthetic import SELECTION_JSON, SLOWER_PACES, kinesthetic_task
 from toolimit.learn.task import TASK_NPZ
+from toolimit.scenes.registry import scripted_motion
+from toolimit.tools import ToolPose
 from toolimit.trajopt import TrackingWeights, TrackOptions
 from toolimit.trajopt.result import TRAJECTORY_JSON, TRAJECTORY_NPZ
 
@@ -64,5 +67,37 @@ def test_a_robot_that_cannot_stand_anywhere_is_refused(
     everywhere = np.array([[0.0, 0.0, 100.0, 100.0, 0.0]])
     monkeypatch.setattr(PlanarSpadeScene, "footprints", lambda self, params: everywhere)
     with pytest.raises(BaseInsideFootprint, match="cannot track the scripted spade motion"):
+        kinesthetic_task(spade_task, tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=1)
+    assert not (tmp_path / "lfd").exists()
+
+
+def test_an_arm_too_slow_for_the_strike_demonstrates_it_slower(tmp_path: Path) -> None:
+    """At real time the Panda cannot follow the scripted 2 m/s strikes; a person guiding it would
+    slow down until it plants the nail: the first slower pace whose replay earns is kept."""
+    hammer = shipped_task("hammer", "3d")
+    lfd = kinesthetic_task(hammer, tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=2)
+    record = json.loads((tmp_path / "lfd" / SELECTION_JSON).read_text())["candidates"][0]
+    by_scale = {float(scale): reward for scale, reward in record["robot_reward_by_time_scale"].items()}
+    assert by_scale[1.0] == 0.0, "the premise: at real time the arm plants no nail"
+    assert record["robot_reward"] > 0
+    assert record["time_scale"] > 1.0 and by_scale[record["time_scale"]] == record["robot_reward"]
+    assert list(by_scale) == [1.0, *(pace for pace in SLOWER_PACES if pace <= record["time_scale"])]
+    assert all(reward == 0.0 for scale, reward in by_scale.items() if scale < record["time_scale"])
+    assert lfd.horizon > record["time_scale"] * len(scripted_motion("hammer", "3d", hammer.params)) / 2
+
+
+def test_a_motion_the_robot_earns_nothing_with_at_any_pace_is_refused(
+    spade_task: LearningTask, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A spade held still above the deposit delivers nothing, however slowly the arm follows it:
+    NoKinestheticDemonstration naming every pace tried, nothing written."""
+
+    def held_still(tool: str, world: str, params: dict, fps: float) -> ToolPose:
+        start = scripted_motion(tool, world, params, fps=fps)
+        return ToolPose(np.repeat(start.position[:1], 24, axis=0), np.repeat(start.rotation[:1], 24, axis=0))
+
+    monkeypatch.setattr("toolimit.learn.kinesthetic.scripted_motion", held_still)
+    paces = ", ".join(f"{pace:g}" for pace in (1.0, *SLOWER_PACES))
+    with pytest.raises(NoKinestheticDemonstration, match=f"earns nothing at time scales {paces}: "):
         kinesthetic_task(spade_task, tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=1)
     assert not (tmp_path / "lfd").exists()

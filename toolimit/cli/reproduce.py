@@ -6,7 +6,8 @@ baselines learn from the same task with the same PPO budget, environments and se
 policy with a learned standard deviation: on the sparse goal reward (OUT/<experiment>/sparse_ppo)
 and on the goal reward plus the appendix's dense shaping (OUT/<experiment>/dense_ppo). LfD, the
 kinesthetic-demonstration baseline (OUT/<experiment>/lfd), tracks the scene's scripted motion with
-the pipeline's stage iii settings in the same scene (:mod:`toolimit.learn.kinesthetic`) and learns
+the pipeline's stage iii settings in the same scene, slower where the arm cannot follow it at the
+pipeline's pace (:mod:`toolimit.learn.kinesthetic`), and learns
 from it with exactly the method's learning flags (cloning, then PPO). Each method is then measured
 on the same footing (:mod:`toolimit.experiments.cells`) and saved as
 OUT/cells/<cell>.json the moment it is known; run again, the command skips every saved cell and
@@ -24,8 +25,8 @@ Talos with the spade on the real recording, the method's stages only; the defaul
 final,sparse_ppo``; the others on a later run into the same folder). ``--jobs N`` runs N experiments
 at a time, each in a child ``toolimit reproduce`` whose output goes to OUT/logs/<experiment>.log
 (the results do not depend on N: every experiment is seeded on its own). Exit codes: 0 done, 1 an
-experiment's pipeline found nothing or its robot cannot track the scripted motion of LfD (those
-cells are missing from the results; a line says why), 2 bad input, 130 interrupted.
+experiment's pipeline found nothing or its robot cannot track the scripted motion of LfD so that
+it earns (those cells are missing from the results; a line says why), 2 bad input, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -318,10 +319,10 @@ def _kinesthetic_task(
 ) -> Path | None:
     """The task file of LfD's kinesthetic demonstration in ``folder`` (made now or earlier), tracked
     with the pipeline's stage iii settings; None after a line saying why the robot cannot track
-    the scripted motion."""
+    the scripted motion so that it earns."""
     from toolimit.cli.run import SELECTION_TIME_SCALES, VELOCITY_WEIGHT
     from toolimit.cli.trajopt import parse_time_scales
-    from toolimit.errors import BaseInsideFootprint, NoScriptedMotion, SolverFailure
+    from toolimit.errors import BaseInsideFootprint, NoKinestheticDemonstration, NoScriptedMotion, SolverFailure
     from toolimit.learn.kinesthetic import kinesthetic_task
     from toolimit.learn.task import TASK_NPZ
     from toolimit.trajopt import TrackingWeights, TrackOptions
@@ -330,7 +331,7 @@ def _kinesthetic_task(
     time_scales = parse_time_scales(SELECTION_TIME_SCALES[experiment.world])
     try:
         kinesthetic_task(task, folder, options, time_scales, seed=seed)
-    except (BaseInsideFootprint, SolverFailure, NoScriptedMotion) as refusal:
+    except (BaseInsideFootprint, NoKinestheticDemonstration, SolverFailure, NoScriptedMotion) as refusal:
         print(f"[{experiment.name}] lfd: no kinesthetic demonstration, no cell: {refusal}")
         return None
     return folder / TASK_NPZ
