@@ -11,11 +11,11 @@ import pytest
 
 from toolimit.errors import BaseInsideFootprint, NoKinestheticDemonstration
 from toolimit.learn import LearningTask, shipped_task
-from toolimit.learn.kinesthetic import SELECTION_JSON, SLOWER_PACES, kinesthetic_task
+from toolimit.learn.kinesthetic import SELECTION_JSON, kinesthetic_task
 from toolimit.learn.task import TASK_NPZ
 from toolimit.scenes.registry import scripted_motion
 from toolimit.tools import ToolPose
-from toolimit.trajopt import TrackingWeights, TrackOptions
+from toolimit.trajopt import TIME_SCALE_GRID, TrackingWeights, TrackOptions
 from toolimit.trajopt.result import TRAJECTORY_JSON, TRAJECTORY_NPZ
 
 OPTIONS = TrackOptions(weights=TrackingWeights(velocity=1e-4), starts=2)
@@ -81,7 +81,7 @@ def test_an_arm_too_slow_for_the_strike_demonstrates_it_slower(tmp_path: Path) -
     assert by_scale[1.0] == 0.0, "the premise: at real time the arm plants no nail"
     assert record["robot_reward"] > 0
     assert record["time_scale"] > 1.0 and by_scale[record["time_scale"]] == record["robot_reward"]
-    assert list(by_scale) == [1.0, *(pace for pace in SLOWER_PACES if pace <= record["time_scale"])]
+    assert list(by_scale) == [scale for scale in TIME_SCALE_GRID if scale <= record["time_scale"]]
     assert all(reward == 0.0 for scale, reward in by_scale.items() if scale < record["time_scale"])
     assert lfd.horizon > record["time_scale"] * len(scripted_motion("hammer", "3d", hammer.params)) / 2
 
@@ -97,7 +97,7 @@ def test_a_motion_the_robot_earns_nothing_with_at_any_pace_is_refused(
         return ToolPose(np.repeat(start.position[:1], 24, axis=0), np.repeat(start.rotation[:1], 24, axis=0))
 
     monkeypatch.setattr("toolimit.learn.kinesthetic.scripted_motion", held_still)
-    paces = ", ".join(f"{pace:g}" for pace in (1.0, *SLOWER_PACES))
+    paces = ", ".join(f"{scale:g}" for scale in TIME_SCALE_GRID)
     with pytest.raises(NoKinestheticDemonstration, match=f"earns nothing at time scales {paces}: "):
         kinesthetic_task(spade_task, tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=1)
     assert not (tmp_path / "lfd").exists()

@@ -11,9 +11,10 @@ time-scale choice by robot replay and replays as the pipeline's.
 
 A kinesthetic demonstration solves the task on the robot: a person guiding the arm goes as slowly
 as the arm needs. So when the robot's replay at the pipeline's time scales earns nothing, the
-motion is tracked again at each of :data:`SLOWER_PACES` in turn, and the first pace whose replay
-earns is kept. Measured on the shipped Panda hammer task: at real time the arm cannot follow the
-2 m/s strikes (its replays plant no nail at time scales 1 to 2), at 3 it plants the nail in every
+motion is tracked again at each slower scale of stage iii's grid
+(:data:`~toolimit.trajopt.time_scale.TIME_SCALE_GRID`) in turn, and the first whose replay earns
+is kept. Measured on the shipped Panda hammer task: at real time the arm cannot follow the
+2 m/s strikes (its replays plant no nail at time scales 1 to 2.5); at 3 it plants the nail in every
 replay. When no pace earns, there is no demonstration: NoKinestheticDemonstration. The result is a
 :class:`~toolimit.learn.task.LearningTask` in the same scene, learnt from exactly as the method's;
 its ``source`` names the demonstration's folder (``kinesthetic``) and, prefixed ``scene_``, where
@@ -44,10 +45,8 @@ from toolimit.trajopt.selection import (
     RobotSelection,
     select_by_robot_execution,
 )
+from toolimit.trajopt.time_scale import TIME_SCALE_GRID
 from toolimit.trajopt.track import TrackOptions
-
-#: Time scales tried in turn, slowest last, when the robot's replay at the pipeline's earns nothing.
-SLOWER_PACES = (1.5, 2.0, 3.0, 4.0)
 
 
 def kinesthetic_task(
@@ -97,10 +96,11 @@ def _robot_demonstration(
     seed: int,
     replays: int,
 ) -> RobotSelection:
-    """The robot's selection at ``time_scales``, or else at the first of :data:`SLOWER_PACES` whose
-    replay earns (module docstring); its record lists the reward at every time scale tried."""
+    """The robot's selection at ``time_scales``, or else at the first slower scale of
+    ``TIME_SCALE_GRID`` whose replay earns (module docstring); its record lists the reward at every
+    time scale tried."""
     tried: dict[float, float] = {}
-    paces = [tuple(time_scales)] + [(pace,) for pace in SLOWER_PACES if pace > max(time_scales)]
+    paces = [tuple(time_scales)] + [(scale,) for scale in TIME_SCALE_GRID if scale > max(time_scales)]
     for scales in paces:
         selection = select_by_robot_execution(
             robot,
