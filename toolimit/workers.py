@@ -76,14 +76,15 @@ def stop_workers(executor: ProcessPoolExecutor) -> None:
     (their results are not needed: the consumer has enough, or was interrupted). Python 3.14 has
     ``executor.terminate_workers()``; before it, the processes are only reachable as ``_processes``."""
     processes = list((getattr(executor, "_processes", None) or {}).values())
+    # The executor's manager thread sees its workers end and closes its wake-up pipe. Wait for it:
+    # on CPython 3.11 the interpreter's exit hook may otherwise write to that pipe while it closes
+    # ("OSError: Bad file descriptor" printed at exit, seen in this project's test runs). Read it
+    # before ``shutdown``, which forgets it.
+    manager = getattr(executor, "_executor_manager_thread", None)
     executor.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         if process.is_alive():
             process.terminate()
-    # The executor's manager thread sees its workers end and closes its wake-up pipe. Wait for it:
-    # on CPython 3.11 the interpreter's exit hook may otherwise write to that pipe while it closes
-    # ("OSError: Bad file descriptor" printed at exit, seen once in this project's test runs).
-    manager = getattr(executor, "_executor_manager_thread", None)
     if manager is not None:
         manager.join(timeout=MANAGER_JOIN_S)
     for process in processes:
