@@ -21,7 +21,8 @@ def test_results_come_in_order_whatever_the_number_of_workers() -> None:
 
 def test_a_consumer_that_stops_early_leaves_no_manager_thread_running() -> None:
     """The pool's manager thread has ended when the generator closes: the interpreter's exit hook then
-    has no wake-up pipe left to write to while it closes (a CPython 3.11 race, see ``toolimit.workers.stop_workers``)."""
+    has no wake-up pipe left to write to while it closes (a CPython 3.11 race, see
+    ``toolimit.workers.stop_workers``)."""
 
     def managers() -> set[threading.Thread]:
         return {thread for thread in threading.enumerate() if "ExecutorManagerThread" in type(thread).__name__}
