@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from toolimit.align.search import AlignmentResult, Candidate
 from toolimit.artifacts import save_json, save_npz
+from toolimit.rotations import quaternions_wxyz
 
 ALIGNMENT_JSON = "alignment.json"
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
@@ -27,7 +27,7 @@ CANDIDATES_NPZ = "candidates.npz"
 
 def continuous_quaternions_wxyz(rotation: np.ndarray) -> np.ndarray:
     """(T, 4) unit quaternions (w, x, y, z) of rotations (T, 3, 3), signs chosen without jumps."""
-    quaternions = Rotation.from_matrix(rotation).as_quat(scalar_first=True)
+    quaternions = quaternions_wxyz(rotation)
     for t in range(1, len(quaternions)):
         if np.dot(quaternions[t], quaternions[t - 1]) < 0.0:
             quaternions[t] = -quaternions[t]

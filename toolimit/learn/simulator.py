@@ -39,11 +39,11 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from toolimit.learn.adr import GOAL_BOX, AdrBounds, goal_box_spec
 from toolimit.learn.task import LearningTask
 from toolimit.robots import make_robot
+from toolimit.rotations import quaternions_wxyz
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
 
@@ -203,7 +203,7 @@ class TaskSimulator:
     # ------------------------------------------------------------------------------- observation
     def _update_tool(self, first: bool = False) -> None:
         positions, rotations = self.robot.tool_poses(self.q, self.task.base)
-        quaternion = Rotation.from_matrix(rotations).as_quat(scalar_first=True)
+        quaternion = quaternions_wxyz(rotations)
         reference = np.where(first, np.array([1.0, 0.0, 0.0, 0.0]), self._quaternion)
         quaternion *= np.where(np.sum(quaternion * reference, axis=1, keepdims=True) < 0.0, -1.0, 1.0)
         self._position, self._rotation, self._quaternion = positions, rotations, quaternion

@@ -125,12 +125,11 @@ class RobotModel:
 
     def tool_placement_world(self, q: np.ndarray, base: np.ndarray) -> pin.SE3:
         """World placement of the tool frame for arm joints q (N,), base (3,) = (x, y, yaw)."""
-        pin.framesForwardKinematics(self.full_model, self._full_data, self.full_configuration(q, base))
-        return pin.SE3(self._full_data.oMf[self.full_tool_frame_id])
+        return pin.SE3(self._tool_frame(q, base))
 
     def tool_pose(self, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Tool frame in the world: position (3,) metres and rotation (3, 3) (columns = tool axes)."""
-        placement = self.tool_placement_world(q, base)
+        placement = self._tool_frame(q, base)
         return placement.translation.copy(), placement.rotation.copy()
 
     def tool_poses(self, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -139,8 +138,14 @@ class RobotModel:
         positions = np.empty((len(q), 3))
         rotations = np.empty((len(q), 3, 3))
         for t, q_t in enumerate(q):
-            positions[t], rotations[t] = self.tool_pose(q_t, base)
+            placement = self._tool_frame(q_t, base)
+            positions[t], rotations[t] = placement.translation, placement.rotation
         return positions, rotations
+
+    def _tool_frame(self, q: np.ndarray, base: np.ndarray) -> pin.SE3:
+        """The tool frame's world placement inside the model's data: valid until the next call."""
+        pin.framesForwardKinematics(self.full_model, self._full_data, self.full_configuration(q, base))
+        return self._full_data.oMf[self.full_tool_frame_id]
 
     def tool_jacobian(self, q: np.ndarray, base: np.ndarray, reference: str = "local") -> np.ndarray:
         """(6, 3 + N) Jacobian of the tool frame w.r.t. (base x, y, yaw, arm joints).

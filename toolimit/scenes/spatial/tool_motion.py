@@ -9,8 +9,8 @@ tested for contact along their path, not only at the control instants.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from toolimit.rotations import rotation_matrices, rotation_vectors
 from toolimit.scenes.base import batched_pose
 from toolimit.tools import ToolPose
 
@@ -29,9 +29,8 @@ def interpolate_poses(
     """
     fractions = np.asarray(fractions, dtype=float)
     relative = np.swapaxes(start_rotation, -1, -2) @ end_rotation
-    rotvec = Rotation.from_matrix(relative).as_rotvec()  # (B, 3), tool frame
-    steps = Rotation.from_rotvec((fractions[:, None, None] * rotvec[None]).reshape(-1, 3)).as_matrix()
-    steps = steps.reshape(len(fractions), -1, 3, 3)
+    rotvec = rotation_vectors(relative)  # (B, 3), tool frame
+    steps = rotation_matrices(fractions[:, None, None] * rotvec[None])  # (S, B, 3, 3)
     rotations = start_rotation[None] @ steps
     positions = start_position[None] + fractions[:, None, None] * (end_position - start_position)[None]
     return positions, rotations
