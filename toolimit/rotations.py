@@ -2,8 +2,8 @@
 
 The learning environment turns the B tool rotations into quaternions at every step, and the 3D
 scenes interpolate the tool's rotation along every control step (logarithm, then exponential at
-each sub-step). scipy's ``Rotation`` does this in about 120 and 150 microseconds per call for
-B = 16, mostly per-call checks; these numba loops take a few microseconds.
+each sub-step). scipy's ``Rotation`` takes about 120 and 150 microseconds for these with B = 16,
+mostly in per-call checks; these numba loops take about 6 and 14 (``benchmarks/rotation_conversions.py``).
 
 They evaluate scipy's formulas (``scipy.spatial.transform``, 1.17) operation for operation:
 Shepperd's method for matrix -> quaternion, the rotation vector of the canonical quaternion
