@@ -51,18 +51,34 @@ def grade(submissions: Path, *extra: str) -> subprocess.CompletedProcess:
 
 @pytest.fixture(scope="module")
 def grades(tmp_path_factory) -> dict:
-    """Every submission's grades: {submission: {exercise: {"passed", "total", "tests", "messages"}}}."""
+    """Every submission's grades: {submission: {exercise: {"passed", "total", "tests", "messages"}}}.
+
+    The reference solutions, the stubs and the file that does not import are graded on every
+    exercise; each wrong solution on its own exercise only (``--exercise``), as an instructor grades
+    one week's exercise."""
     folder = tmp_path_factory.mktemp("submissions")
-    (folder / "reference").symlink_to(COURSE / "solutions")
-    (folder / "stubs").symlink_to(COURSE / "exercises")
-    broken = folder / "does_not_import"
+    every = folder / "every_exercise"
+    every.mkdir()
+    (every / "reference").symlink_to(COURSE / "solutions")
+    (every / "stubs").symlink_to(COURSE / "exercises")
+    broken = every / "does_not_import"
     broken.mkdir()
     (broken / "ex01_velocity_keypoints.py").write_text("def velocity_keypoints(demo, fraction=0.05)\n    return []\n")
-    for variant in VARIANTS:
-        (folder / variant).symlink_to(WRONG / variant)
-    result = grade(folder, "--jobs", "2", "--out", str(folder / "grades.json"))
-    assert result.returncode == 0, result.stderr
-    return json.loads((folder / "grades.json").read_text())
+    runs = [(every, ())]
+    for exercise in EXERCISES:
+        wrong = folder / exercise
+        wrong.mkdir()
+        for variant in VARIANTS:
+            if wrong_solution_file(variant).stem == exercise:
+                (wrong / variant).symlink_to(WRONG / variant)
+        runs.append((wrong, ("--exercise", exercise)))
+    graded: dict = {}
+    for submissions, selection in runs:
+        out = submissions / "grades.json"
+        result = grade(submissions, *selection, "--jobs", "2", "--out", str(out))
+        assert result.returncode == 0, result.stderr
+        graded |= json.loads(out.read_text())
+    return graded
 
 
 @pytest.mark.parametrize("exercise", EXERCISES)
@@ -96,6 +112,7 @@ def test_wrong_solution_is_caught_by_the_expected_graders(grades, variant):
     for prefix in expected:
         assert any(test.startswith(prefix) for test in failed), f"{variant}: {prefix} did not fail; failed: {failed}"
     assert not any(outcome == "error" for outcome in result["tests"].values()), result["messages"]
+    assert set(grades[variant]) == {exercise}, "--exercise graded other exercises too"
 
 
 def test_missing_or_broken_files_fail_with_a_readable_message(grades):
@@ -106,6 +123,11 @@ def test_missing_or_broken_files_fail_with_a_readable_message(grades):
         missing = broken[exercise]
         assert missing["passed"] == 0
         assert all(f"no file {exercise}.py" in m for m in missing["messages"].values()), missing["messages"]
+
+
+def test_grade_rejects_an_unknown_exercise(tmp_path):
+    result = grade(tmp_path, "--exercise", "ex99_unknown")
+    assert result.returncode == 2 and "invalid choice: 'ex99_unknown'" in result.stderr
 
 
 def test_grade_rejects_a_missing_folder(tmp_path):
