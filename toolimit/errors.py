@@ -24,6 +24,19 @@ class DemoError(InputError):
     """A demonstration is malformed: the message names the field, the shape or the value."""
 
 
+class InvalidLearningConfig(InputError):
+    """A learning setting no run can use; ``field`` names the setting, ``problem`` says what is wrong
+    (the command line names its flag instead)."""
+
+    def __init__(self, field: str, problem: str) -> None:
+        super().__init__(field, problem)
+        self.field = field
+        self.problem = problem
+
+    def __str__(self) -> str:
+        return f"{self.field}: {self.problem}"
+
+
 class InvalidSceneParameters(InputError):
     """Parameters that make a scene impossible (overlap, out of bounds); the message says why."""
 

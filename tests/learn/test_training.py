@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 
+from toolimit.errors import InputError, InvalidLearningConfig
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
 
@@ -65,6 +66,25 @@ def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path)
 def test_unknown_preset_is_refused():
     with pytest.raises(ValueError, match="unknown preset 'fast'"):
         LearningConfig(preset="fast").settings()
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "said"),
+    [
+        ("envs", 0, "envs: must be an integer >= 1, got 0"),
+        ("timesteps", -1, "timesteps: must be an integer >= 0, got -1"),
+        ("checkpoint_every", 2.5, "checkpoint_every: must be an integer >= 1, got 2.5"),
+        ("torch_threads", 0, "torch_threads: must be an integer >= 1, got 0"),
+        ("clone_noise", float("nan"), "clone_noise: must be a finite number >= 0, got nan"),
+        ("action_std", 0.0, "action_std: must be a finite number > 0 (rad/s), got 0.0"),
+        ("reward", "shaped", "reward: unknown reward 'shaped'; choose one of sparse, dense"),
+    ],
+)
+def test_a_setting_no_run_can_use_is_refused_naming_its_field(field, value, said):
+    with pytest.raises(InvalidLearningConfig) as refused:
+        LearningConfig(**{field: value})
+    assert str(refused.value) == said and refused.value.field == field
+    assert isinstance(refused.value, InputError)  # the command line answers it in one line
 
 
 def test_learned_std_stays_above_the_authors_floor(spade_task, tmp_path):

@@ -98,42 +98,31 @@ def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | Non
 
 
 def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
-    """The LearningConfig of the flags of :func:`add_learning_arguments`; CliError for bad values."""
+    """The LearningConfig of the flags of :func:`add_learning_arguments`; CliError naming the flag of a
+    value the config refuses."""
+    from toolimit.errors import InvalidLearningConfig
     from toolimit.learn.training import LearningConfig
 
-    for flag, value, low in (
-        ("--timesteps", args.timesteps, 0),
-        ("--envs", args.envs, 1),
-        ("--clone-rollouts", args.clone_rollouts, 1),
-        ("--clone-steps", args.clone_steps, 0),
-        ("--value-steps", args.value_steps, 0),
-        ("--checkpoint-every", args.checkpoint_every, 1),
-        ("--adr-every", args.adr_every, 1),
-        ("--seed", args.seed, 0),
-    ):
-        if value < low:
-            raise CliError(f"{flag}: must be an integer >= {low}, got {value}")
-    if not 0.0 <= args.clone_noise < float("inf"):
-        raise CliError(f"--clone-noise: must be a finite number >= 0, got {args.clone_noise}")
-    if not 0.0 < args.action_std < float("inf"):
-        raise CliError(f"--action-std: must be a finite number > 0 (rad/s), got {args.action_std}")
-    return LearningConfig(
-        timesteps=args.timesteps,
-        envs=args.envs,
-        preset=args.preset,
-        clone=not args.no_clone,
-        clone_rollouts=args.clone_rollouts,
-        clone_noise=args.clone_noise,
-        clone_steps=args.clone_steps,
-        value_steps=args.value_steps,
-        action_std=args.action_std,
-        checkpoint_every=args.checkpoint_every,
-        seed=args.seed,
-        scene_kwargs=scene_kwargs,
-        reward=args.reward,
-        adr=args.adr,
-        adr_every=args.adr_every,
-    )
+    try:
+        return LearningConfig(
+            timesteps=args.timesteps,
+            envs=args.envs,
+            preset=args.preset,
+            clone=not args.no_clone,
+            clone_rollouts=args.clone_rollouts,
+            clone_noise=args.clone_noise,
+            clone_steps=args.clone_steps,
+            value_steps=args.value_steps,
+            action_std=args.action_std,
+            checkpoint_every=args.checkpoint_every,
+            seed=args.seed,
+            scene_kwargs=scene_kwargs,
+            reward=args.reward,
+            adr=args.adr,
+            adr_every=args.adr_every,
+        )
+    except InvalidLearningConfig as error:  # every field set here has the flag --field-name
+        raise CliError(f"--{error.field.replace('_', '-')}: {error.problem}") from None
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

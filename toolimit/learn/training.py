@@ -13,6 +13,7 @@ resumes from the last checkpoint; a finished run returns at once.
 from __future__ import annotations
 
 import json
+import numbers
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -25,6 +26,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 
 from toolimit.artifacts import save_json
+from toolimit.errors import InvalidLearningConfig
 from toolimit.learn.adr import EVERY as ADR_EVERY
 from toolimit.learn.adr import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
@@ -37,6 +39,7 @@ from toolimit.learn.ppo import (
     resume_or_start,
     train,
 )
+from toolimit.learn.simulator import REWARDS
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 from toolimit.progress import tqdm
@@ -90,10 +93,34 @@ class LearningConfig:
     adr: bool = False
     adr_every: int = ADR_EVERY
 
+    def __post_init__(self) -> None:
+        """InvalidLearningConfig, naming the field, for a value no run can use: refused here, before
+        :func:`learn_policy` writes anything."""
+        for field, lowest in (
+            ("timesteps", 0),
+            ("envs", 1),
+            ("clone_rollouts", 1),
+            ("clone_steps", 0),
+            ("value_steps", 0),
+            ("checkpoint_every", 1),
+            ("seed", 0),
+            ("torch_threads", 1),
+            ("adr_every", 1),
+        ):
+            value = getattr(self, field)
+            if not isinstance(value, numbers.Integral) or value < lowest:
+                raise InvalidLearningConfig(field, f"must be an integer >= {lowest}, got {value!r}")
+        if not 0.0 <= self.clone_noise < float("inf"):
+            raise InvalidLearningConfig("clone_noise", f"must be a finite number >= 0, got {self.clone_noise!r}")
+        if not 0.0 < self.action_std < float("inf"):
+            raise InvalidLearningConfig("action_std", f"must be a finite number > 0 (rad/s), got {self.action_std!r}")
+        if self.preset not in PRESETS:
+            raise InvalidLearningConfig("preset", f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
+        if self.reward not in REWARDS:
+            raise InvalidLearningConfig("reward", f"unknown reward {self.reward!r}; choose one of {', '.join(REWARDS)}")
+
     def settings(self) -> PpoSettings:
         """The PPO settings of the preset."""
-        if self.preset not in PRESETS:
-            raise ValueError(f"unknown preset {self.preset!r}; known: {', '.join(PRESETS)}")
         return PRESETS[self.preset]
 
 
