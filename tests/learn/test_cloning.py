@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 
+from toolimit.errors import InputError
 from toolimit.learn import BatchedTaskVecEnv
 from toolimit.learn.cloning import (action_mean, clone, collect_demonstrations, discounted_returns, fix_action_std,
                                     mean_action_loss, normalised_action_std)
@@ -71,3 +73,21 @@ def test_cloning_reduces_both_losses_and_keeps_the_std(spade_task):
     assert torch.equal(model.policy.log_std.detach(), std_before)
     mean = action_mean(model.policy, torch.as_tensor(data.observations)).detach().numpy()
     assert np.isclose(np.mean((mean - data.actions) ** 2), report.action_loss_end, rtol=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("argument", "value", "said"),
+    [
+        ("steps", -1, "steps must be >= 0, got -1"),
+        ("value_steps", -5, "value_steps must be >= 0, got -5"),
+        ("batch_size", 0, "batch_size must be >= 1, got 0"),
+        ("learning_rate", 0.0, "learning_rate must be positive, got 0.0"),
+    ],
+)
+def test_clone_refuses_a_budget_it_cannot_run(spade_task, argument, value, said):
+    model = _model(spade_task)
+    data = collect_demonstrations(spade_task, rollouts=1, seed=0)
+    before = torch.cat([p.detach().flatten() for p in model.policy.parameters()])
+    with pytest.raises(InputError, match=f"^{said}$"):
+        clone(model.policy, data, **{argument: value}, progress=False)
+    assert torch.equal(torch.cat([p.detach().flatten() for p in model.policy.parameters()]), before)

@@ -9,7 +9,9 @@ import pytest
 import torch
 
 from toolimit.errors import InputError, InvalidLearningConfig
+from toolimit.learn import BatchedTaskVecEnv
 from toolimit.learn.evaluate import evaluate
+from toolimit.learn.ppo import PRESETS, make_ppo
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
 
 TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20,
@@ -61,6 +63,12 @@ def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path)
     assert result.successes.dtype == bool and result.goal_rewards.shape == (3,)
     record = result.record()
     assert record["episodes"] == 3 and 0.0 <= record["success_rate"] <= 1.0
+
+
+def test_evaluation_refuses_zero_episodes(spade_task):
+    model = make_ppo(BatchedTaskVecEnv(spade_task, 2, seed=0), PRESETS["toolimit"], seed=0)
+    with pytest.raises(InputError, match="^episodes must be >= 1, got 0$"):
+        evaluate(model, spade_task, episodes=0)
 
 
 def test_unknown_preset_is_refused():

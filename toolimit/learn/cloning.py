@@ -23,6 +23,7 @@ import numpy as np
 import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
+from toolimit.errors import InputError
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
 from toolimit.progress import tqdm
@@ -157,6 +158,11 @@ def clone(
     (seeded by ``seed``), so that more rollouts do not make a step dearer. The standard deviation
     is left as it is (see :func:`fix_action_std`).
     """
+    for name, value, lowest in (("steps", steps, 0), ("value_steps", value_steps, 0), ("batch_size", batch_size, 1)):
+        if value < lowest:
+            raise InputError(f"{name} must be >= {lowest}, got {value!r}")
+    if not learning_rate > 0:
+        raise InputError(f"learning_rate must be positive, got {learning_rate!r}")
     observations = torch.as_tensor(demonstrations.observations, device=policy.device)
     actions = torch.as_tensor(demonstrations.actions, device=policy.device)
     returns = torch.as_tensor(demonstrations.returns, device=policy.device)

@@ -16,6 +16,7 @@ import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.artifacts import save_npz
+from toolimit.errors import InputError
 from toolimit.learn.simulator import observation_size
 from toolimit.learn.task import LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
@@ -61,6 +62,8 @@ def evaluate(
     scene_kwargs: dict[str, Any] | None = None,
 ) -> Evaluation:
     """Roll ``model``'s policy out for ``episodes`` episodes of ``task`` (one batch, seeded)."""
+    if episodes < 1:
+        raise InputError(f"episodes must be >= 1, got {episodes!r}")
     env = BatchedTaskVecEnv(task, episodes, seed=seed, scene_kwargs=scene_kwargs, adr=observes_goal_box(model, task))
     observation = env.reset()
     joints = [env.simulator.q.copy()]
