@@ -8,7 +8,7 @@ import pytest
 
 from toolimit.cli import main
 
-TINY = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "2", "--clone-steps", "10", "--quiet"]
+TINY = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "2", "--clone-steps", "10", "--value-steps", "10", "--quiet"]
 
 
 def _error_line(capsys) -> str:

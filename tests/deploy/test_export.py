@@ -198,7 +198,8 @@ def test_a_panda_policys_rollout_exports_within_the_published_limits(tmp_path):
     from toolimit.learn.training import load_policy
 
     learned = tmp_path / "learned"
-    tiny = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "1", "--clone-steps", "50", "--quiet"]
+    tiny = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "1", "--clone-steps", "50", "--value-steps", "10",
+            "--quiet"]
     assert main(["learn", "--env", "toolimit/Spade3D-v0", "--out", str(learned), *tiny]) == 0
     model, task = load_policy(learned)
     rollout = evaluate(model, task, episodes=1, deterministic=True, seed=3).joint_positions[0]
