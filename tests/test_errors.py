@@ -11,6 +11,7 @@ from toolimit.errors import (
     BaseInsideFootprint,
     DemoError,
     InputError,
+    InvalidLearningConfig,
     InvalidSceneParameters,
     PathOutsideLimits,
     SolverFailure,
@@ -21,7 +22,7 @@ from toolimit.errors import (
 @pytest.mark.parametrize("kind, builtin", [
     (InputError, ValueError), (DemoError, ValueError), (InvalidSceneParameters, ValueError),
     (BaseInsideFootprint, ValueError), (PathOutsideLimits, ValueError), (SolverFailure, RuntimeError),
-    (cli.CliError, ValueError),
+    (cli.CliError, ValueError), (InvalidLearningConfig, ValueError),
 ])
 def test_every_kind_is_a_toolimit_error_and_its_builtin(kind, builtin):
     assert issubclass(kind, ToolimitError) and issubclass(kind, builtin)

@@ -1,6 +1,8 @@
-"""Writing stage outputs safely: every file goes to a temporary name and is renamed when complete.
+"""Stage outputs on disk: written safely, read with one-line errors.
 
-A crash or a bad input therefore never leaves a half-written ``.npz`` / ``.json`` behind.
+Every file goes to a temporary name and is renamed when complete, so a crash or a bad input never
+leaves a half-written ``.npz`` / ``.json`` behind. :func:`load_npz` is the one way ``.npz`` files
+are read: a file that is not a readable archive is an input error naming it, not a traceback.
 """
 
 from __future__ import annotations
@@ -9,11 +11,14 @@ import contextlib
 import json
 import os
 import tempfile
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from toolimit.errors import InputError
 
 
 @contextlib.contextmanager
@@ -74,3 +79,30 @@ def save_npz(path: str | os.PathLike[str], **arrays: Any) -> None:
     """Write arrays to an uncompressed ``.npz`` atomically."""
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez(handle, **arrays)
+
+
+def load_npz(
+    path: str | os.PathLike[str], error: type[InputError] = InputError, what: str | None = None
+) -> dict[str, np.ndarray]:
+    """Every array of the ``.npz`` file ``path``, read whole (no pickled objects).
+
+    A missing file is FileNotFoundError; a file that is not a readable archive raises ``error``
+    naming it, as "<path>: not a <what> (...)" when ``what`` (e.g. "task file") is given, else
+    "<path>: cannot read as .npz (...)". Callers check the keys and shapes they need.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+
+    def unreadable(reason: str) -> InputError:
+        return error(f"{path}: not a {what} ({reason})" if what else f"{path}: cannot read as .npz ({reason})")
+
+    if not zipfile.is_zipfile(path):
+        raise unreadable("not a zip archive")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {key: data[key] for key in data.files}
+    except (zipfile.BadZipFile, OSError, EOFError) as failure:
+        raise unreadable(str(failure)) from None
+    except ValueError as failure:  # object arrays need pickle, which is refused
+        raise unreadable(f"unreadable array: {failure}") from None

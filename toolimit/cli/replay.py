@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from toolimit.artifacts import load_npz
 from toolimit.cli import (
     CliError,
     add_frame_argument,
@@ -112,12 +113,11 @@ def _params_from_json(path: Path, specs) -> dict:
 def _params_from_poses(path: Path, specs) -> dict:
     """The scene parameters stored in an original aligned poses file, under the scenes' names."""
     wanted = {spec.name for spec in specs}
-    with np.load(path) as arrays:
-        found = {
-            ORIGINAL_PARAMETER_NAMES[key]: np.asarray(arrays[key], dtype=float)
-            for key in arrays.files
-            if ORIGINAL_PARAMETER_NAMES.get(key) in wanted
-        }
+    found = {
+        ORIGINAL_PARAMETER_NAMES[key]: np.asarray(value, dtype=float)
+        for key, value in load_npz(path).items()
+        if ORIGINAL_PARAMETER_NAMES.get(key) in wanted
+    }
     missing = sorted(wanted - set(found))
     if missing:
         keys = sorted(key for key, name in ORIGINAL_PARAMETER_NAMES.items() if name in missing)

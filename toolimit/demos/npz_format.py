@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from toolimit.artifacts import atomic_path
+from toolimit.artifacts import atomic_path, load_npz
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.errors import DemoError
 from toolimit.tools import ToolPose, tool_spec
@@ -109,7 +109,7 @@ def load_demo(path: str | os.PathLike[str], tool: str | None = None, fps: float 
             f"{path}: unknown demonstration file type {path.suffix!r} "
             f"(expected .npz, or {' / '.join(PICKLE_SUFFIXES)} from the video motion estimator)"
         )
-    arrays = _read_npz(path)
+    arrays = load_npz(path, DemoError)
     if "head" in arrays or "handle" in arrays:
         return _project_demo(path, arrays, tool)
     if "tip_position" in arrays:
@@ -139,22 +139,10 @@ def load_video_trajectory(
         raise FileNotFoundError(f"trajectory file not found: {path}")
     if path.suffix.lower() != ".npz":
         raise DemoError(f"{path}: expected an .npz aligned trajectory, got suffix {path.suffix!r}")
-    arrays = _read_npz(path)
+    arrays = load_npz(path, DemoError)
     if "tip_position" not in arrays:
         raise DemoError(f"{path}: missing key 'tip_position' (keys: {sorted(arrays)})")
     return _video_trajectory(path, arrays, tool, fps)
-
-
-def _read_npz(path: Path) -> dict[str, np.ndarray]:
-    if not zipfile.is_zipfile(path):
-        raise DemoError(f"{path}: cannot read as .npz (not a zip archive)")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            return {key: data[key] for key in data.files}
-    except (zipfile.BadZipFile, OSError, EOFError) as error:
-        raise DemoError(f"{path}: cannot read as .npz ({error})") from None
-    except ValueError as error:  # object arrays need pickle, which we refuse
-        raise DemoError(f"{path}: unreadable array ({error})") from None
 
 
 def _tool_name(path: Path, tool: str | None) -> str:

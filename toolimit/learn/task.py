@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.artifacts import save_npz
+from toolimit.artifacts import load_npz, save_npz
 from toolimit.errors import InputError
 from toolimit.robots import RobotModel
 from toolimit.scenes.base import Scene, SceneParams
@@ -99,11 +99,7 @@ class LearningTask:
             path = path / TASK_NPZ
         if not path.is_file():
             raise TaskFileError(f"{path}: no such task file")
-        try:
-            with np.load(path) as arrays:
-                data = {key: arrays[key] for key in arrays.files}
-        except (OSError, ValueError) as error:
-            raise TaskFileError(f"{path}: not a task file ({error})") from None
+        data = load_npz(path, TaskFileError, what="task file")
         missing = [key for key in _REQUIRED if key not in data]
         if missing:
             raise TaskFileError(f"{path}: missing keys {missing}")
@@ -228,9 +224,14 @@ def task_from_pipeline(
         demo_file = alignment_dir / ALIGNED_DEMO_NPZ
         if not demo_file.is_file():
             raise TaskFileError(f"{demo_file}: no such file (run `toolimit align` first)")
-        with np.load(demo_file) as arrays:
-            tool, world = str(arrays["tool"]), str(arrays["scene_world"])
-            params = {k.removeprefix("param_"): _param_value(arrays[k]) for k in arrays.files if k.startswith("param_")}
+        arrays = load_npz(demo_file, TaskFileError)
+        missing = [key for key in ("tool", "scene_world") if key not in arrays]
+        if missing:
+            raise TaskFileError(f"{demo_file}: missing keys {missing}")
+        tool, world = str(arrays["tool"]), str(arrays["scene_world"])
+        params = {
+            k.removeprefix("param_"): _param_value(value) for k, value in arrays.items() if k.startswith("param_")
+        }
         candidate = "best"
     if tool != trajectory.tool:
         raise TaskFileError(

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.artifacts import atomic_path, json_text
+from toolimit.artifacts import atomic_path, json_text, load_npz
 from toolimit.errors import InputError
 from toolimit.trajopt.problem import TrackingWeights
 
@@ -47,15 +47,15 @@ def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
     path = Path(directory) / TRAJECTORY_NPZ
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file (expected the output of `toolimit trajopt`)")
-    with np.load(path, allow_pickle=False) as data:
-        missing = [key for key in ("q", "v", "base", "joint_names", "dt") if key not in data]
-        if missing:
-            raise InputError(f"{path}: missing field(s) {', '.join(missing)}")
-        q = np.asarray(data["q"], dtype=float)
-        v = np.asarray(data["v"], dtype=float)
-        base = np.asarray(data["base"], dtype=float)
-        joint_names = tuple(str(name) for name in np.atleast_1d(data["joint_names"]))
-        dt = float(data["dt"])
+    data = load_npz(path)
+    missing = [key for key in ("q", "v", "base", "joint_names", "dt") if key not in data]
+    if missing:
+        raise InputError(f"{path}: missing field(s) {', '.join(missing)}")
+    q = np.asarray(data["q"], dtype=float)
+    v = np.asarray(data["v"], dtype=float)
+    base = np.asarray(data["base"], dtype=float)
+    joint_names = tuple(str(name) for name in np.atleast_1d(data["joint_names"]))
+    dt = float(data["dt"])
     if q.ndim != 2 or len(q) < 2:
         raise InputError(f"{path}: q must have shape (T+1, N) with T >= 1, got {q.shape}")
     n_steps, n_joints = len(q) - 1, q.shape[1]

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from toolimit.artifacts import load_npz
 from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.progress import tqdm
 from toolimit.robots.model import RobotModel
@@ -110,19 +111,19 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file (run `toolimit align` first)")
-    with np.load(path) as arrays:
-        missing = [
-            k
-            for k in ("tip_position", "tip_quaternion_wxyz", "fps", "tool", "scene_world", "alignment_reward")
-            if k not in arrays.files
-        ]
-        if missing:
-            raise InputError(f"{path}: missing keys {missing}")
-        positions, quaternions = arrays["tip_position"], arrays["tip_quaternion_wxyz"]
-        fps = float(arrays["fps"])
-        rewards = arrays["alignment_reward"]
-        params = {k.removeprefix("param_"): arrays[k] for k in arrays.files if k.startswith("param_")}
-        tool, world = str(arrays["tool"]), str(arrays["scene_world"])
+    arrays = load_npz(path)
+    missing = [
+        k
+        for k in ("tip_position", "tip_quaternion_wxyz", "fps", "tool", "scene_world", "alignment_reward")
+        if k not in arrays
+    ]
+    if missing:
+        raise InputError(f"{path}: missing keys {missing}")
+    positions, quaternions = arrays["tip_position"], arrays["tip_quaternion_wxyz"]
+    fps = float(arrays["fps"])
+    rewards = arrays["alignment_reward"]
+    params = {k.removeprefix("param_"): value for k, value in arrays.items() if k.startswith("param_")}
+    tool, world = str(arrays["tool"]), str(arrays["scene_world"])
     if positions.ndim != 3 or positions.shape[2] != 3 or quaternions.shape[:2] != positions.shape[:2]:
         raise InputError(
             f"{path}: tip_position must be (K, T, 3) and tip_quaternion_wxyz (K, T, 4), "

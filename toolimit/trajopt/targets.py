@@ -9,11 +9,11 @@ shared real recordings use the original code's spade tip frame instead; see
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from toolimit.artifacts import load_npz
 from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE
 from toolimit.errors import InputError
 from toolimit.trajopt.problem import PoseTargets
@@ -34,20 +34,13 @@ def targets_from_alignment(result: AlignmentResult, candidate: Candidate | None 
 
 def load_pose_targets(path: str | os.PathLike[str]) -> PoseTargets:
     """Targets from an ``.npz`` with ``tip_position``, ``tip_quaternion_wxyz`` and ``fps``."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
-    try:
-        arrays = np.load(path)
-    except (ValueError, OSError) as error:
-        raise InputError(f"{path}: not a readable .npz file ({error})") from None
-    with arrays:
-        missing = [key for key in ("tip_position", "tip_quaternion_wxyz", "fps") if key not in arrays.files]
-        if missing:
-            raise InputError(f"{path}: missing keys {missing} (needs tip_position, tip_quaternion_wxyz, fps)")
-        positions = np.asarray(arrays["tip_position"], dtype=float)
-        quaternions = np.asarray(arrays["tip_quaternion_wxyz"], dtype=float)
-        fps = float(np.asarray(arrays["fps"]).reshape(()))
+    arrays = load_npz(path)
+    missing = [key for key in ("tip_position", "tip_quaternion_wxyz", "fps") if key not in arrays]
+    if missing:
+        raise InputError(f"{path}: missing keys {missing} (needs tip_position, tip_quaternion_wxyz, fps)")
+    positions = np.asarray(arrays["tip_position"], dtype=float)
+    quaternions = np.asarray(arrays["tip_quaternion_wxyz"], dtype=float)
+    fps = float(np.asarray(arrays["fps"]).reshape(()))
     if positions.ndim != 2 or positions.shape[1] != 3:
         raise InputError(f"{path}: tip_position must have shape (T, 3), got {positions.shape}")
     try:
