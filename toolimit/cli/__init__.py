@@ -18,7 +18,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
-from toolimit import interrupts
+from toolimit import __version__, interrupts
 from toolimit.errors import InputError, ToolimitError
 
 if TYPE_CHECKING:
@@ -178,6 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="A robot learns to use a tool from one video demonstration: "
         "demo (i) -> align (ii) -> trajopt (iii) -> learn (iv) -> export; `run` does them all.",
     )
+    parser.add_argument("--version", action="version", version=f"toolimit {__version__}")
     subparsers = parser.add_subparsers(dest="command", required=True)
     for module_name in COMMANDS:
         importlib.import_module(module_name).register(subparsers)
