@@ -55,7 +55,9 @@ def run_graders(
             command += ["-k", keyword]
         env = {**os.environ, SUBMISSION_ENV: str(folder.resolve())}
         try:
-            subprocess.run(command, env=env, cwd=GRADERS.parents[1], capture_output=True, timeout=timeout_s, check=False)
+            subprocess.run(
+                command, env=env, cwd=GRADERS.parents[1], capture_output=True, timeout=timeout_s, check=False
+            )
         except subprocess.TimeoutExpired:
             return {"all": exercise_grade({"run": "error"}, {"run": f"timed out after {timeout_s:.0f} s"})}
         if not report.is_file():
@@ -120,7 +122,9 @@ def main(argv: list[str] | None = None) -> int:
     if not args.submissions.is_dir():
         print(f"grade: error: {args.submissions} is not a folder", file=sys.stderr)
         return 2
-    students = sorted(path for path in args.submissions.iterdir() if path.is_dir() and not path.name.startswith((".", "_")))
+    students = sorted(
+        path for path in args.submissions.iterdir() if path.is_dir() and not path.name.startswith((".", "_"))
+    )
     if not students:
         print(f"grade: error: {args.submissions} has no student sub-folder", file=sys.stderr)
         return 2
