@@ -80,3 +80,10 @@ def test_a_corrupt_input_file_is_one_line_and_exit_2(tmp_path, capsys, command):
     error = capsys.readouterr().err.strip().splitlines()
     assert error == [f"toolimit {command}: error: {tmp_path / 'trajectory.npz'}: cannot read as .npz (not a zip archive)"]
     assert not (tmp_path / "out").exists()
+
+
+def test_load_npz_names_the_required_keys_a_file_lacks(tmp_path):
+    save_npz(tmp_path / "a.npz", q=np.zeros(3))
+    assert sorted(load_npz(tmp_path / "a.npz", required=("q",))) == ["q"]
+    with pytest.raises(DemoError, match=r"a.npz: missing keys \['v', 'dt'\]$"):
+        load_npz(tmp_path / "a.npz", DemoError, required=("q", "v", "dt"))

@@ -12,7 +12,7 @@ import json
 import os
 import tempfile
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -82,13 +82,17 @@ def save_npz(path: str | os.PathLike[str], **arrays: Any) -> None:
 
 
 def load_npz(
-    path: str | os.PathLike[str], error: type[InputError] = InputError, what: str | None = None
+    path: str | os.PathLike[str],
+    error: type[InputError] = InputError,
+    what: str | None = None,
+    required: Iterable[str] = (),
 ) -> dict[str, np.ndarray]:
     """Every array of the ``.npz`` file ``path``, read whole (no pickled objects).
 
     A missing file is FileNotFoundError; a file that is not a readable archive raises ``error``
     naming it, as "<path>: not a <what> (...)" when ``what`` (e.g. "task file") is given, else
-    "<path>: cannot read as .npz (...)". Callers check the keys and shapes they need.
+    "<path>: cannot read as .npz (...)"; so does one without every ``required`` key ("<path>:
+    missing keys [...]"). Callers check the shapes they need.
     """
     path = Path(path)
     if not path.is_file():
@@ -101,8 +105,12 @@ def load_npz(
         raise unreadable("not a zip archive")
     try:
         with np.load(path, allow_pickle=False) as data:
-            return {key: data[key] for key in data.files}
+            arrays = {key: data[key] for key in data.files}
     except (zipfile.BadZipFile, OSError, EOFError) as failure:
         raise unreadable(str(failure)) from None
     except ValueError as failure:  # object arrays need pickle, which is refused
         raise unreadable(f"unreadable array: {failure}") from None
+    missing = [key for key in required if key not in arrays]
+    if missing:
+        raise error(f"{path}: missing keys {missing}")
+    return arrays

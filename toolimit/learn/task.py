@@ -99,10 +99,7 @@ class LearningTask:
             path = path / TASK_NPZ
         if not path.is_file():
             raise TaskFileError(f"{path}: no such task file")
-        data = load_npz(path, TaskFileError, what="task file")
-        missing = [key for key in _REQUIRED if key not in data]
-        if missing:
-            raise TaskFileError(f"{path}: missing keys {missing}")
+        data = load_npz(path, TaskFileError, what="task file", required=_REQUIRED)
         reference_q, base = np.asarray(data["reference_q"], float), np.asarray(data["base"], float)
         joint_names = tuple(str(name) for name in data["joint_names"])
         if reference_q.ndim != 2 or reference_q.shape[1] != len(joint_names) or len(reference_q) < 2:
@@ -224,10 +221,7 @@ def task_from_pipeline(
         demo_file = alignment_dir / ALIGNED_DEMO_NPZ
         if not demo_file.is_file():
             raise TaskFileError(f"{demo_file}: no such file (run `toolimit align` first)")
-        arrays = load_npz(demo_file, TaskFileError)
-        missing = [key for key in ("tool", "scene_world") if key not in arrays]
-        if missing:
-            raise TaskFileError(f"{demo_file}: missing keys {missing}")
+        arrays = load_npz(demo_file, TaskFileError, required=("tool", "scene_world"))
         tool, world = str(arrays["tool"]), str(arrays["scene_world"])
         params = {
             k.removeprefix("param_"): _param_value(value) for k, value in arrays.items() if k.startswith("param_")

@@ -47,10 +47,7 @@ def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
     path = Path(directory) / TRAJECTORY_NPZ
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file (expected the output of `toolimit trajopt`)")
-    data = load_npz(path)
-    missing = [key for key in ("q", "v", "base", "joint_names", "dt") if key not in data]
-    if missing:
-        raise InputError(f"{path}: missing field(s) {', '.join(missing)}")
+    data = load_npz(path, required=("q", "v", "base", "joint_names", "dt"))
     q = np.asarray(data["q"], dtype=float)
     v = np.asarray(data["v"], dtype=float)
     base = np.asarray(data["base"], dtype=float)

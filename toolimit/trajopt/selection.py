@@ -111,14 +111,9 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file (run `toolimit align` first)")
-    arrays = load_npz(path)
-    missing = [
-        k
-        for k in ("tip_position", "tip_quaternion_wxyz", "fps", "tool", "scene_world", "alignment_reward")
-        if k not in arrays
-    ]
-    if missing:
-        raise InputError(f"{path}: missing keys {missing}")
+    arrays = load_npz(
+        path, required=("tip_position", "tip_quaternion_wxyz", "fps", "tool", "scene_world", "alignment_reward")
+    )
     positions, quaternions = arrays["tip_position"], arrays["tip_quaternion_wxyz"]
     fps = float(arrays["fps"])
     rewards = arrays["alignment_reward"]

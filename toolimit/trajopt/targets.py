@@ -34,10 +34,7 @@ def targets_from_alignment(result: AlignmentResult, candidate: Candidate | None 
 
 def load_pose_targets(path: str | os.PathLike[str]) -> PoseTargets:
     """Targets from an ``.npz`` with ``tip_position``, ``tip_quaternion_wxyz`` and ``fps``."""
-    arrays = load_npz(path)
-    missing = [key for key in ("tip_position", "tip_quaternion_wxyz", "fps") if key not in arrays]
-    if missing:
-        raise InputError(f"{path}: missing keys {missing} (needs tip_position, tip_quaternion_wxyz, fps)")
+    arrays = load_npz(path, required=("tip_position", "tip_quaternion_wxyz", "fps"))
     positions = np.asarray(arrays["tip_position"], dtype=float)
     quaternions = np.asarray(arrays["tip_quaternion_wxyz"], dtype=float)
     fps = float(np.asarray(arrays["fps"]).reshape(()))
