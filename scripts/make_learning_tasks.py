@@ -2,8 +2,9 @@
 
 For each (tool, world, robot): align a shipped demonstration (``data/demos``), optimise the robot's
 trajectory with selection by robot execution, and save the task (scene parameters, base, reference
-joints, horizon). The stages run through the ``toolimit`` command, exactly as a user would run
-them; their folders go to a temporary directory (or ``--work DIR`` to keep them).
+joints, horizon). The stages are the pipeline's own functions (:mod:`toolimit.pipeline`) with their
+default settings but for the few below; their folders go to a temporary directory (or ``--work DIR``
+to keep them).
 
     python scripts/make_learning_tasks.py [--only spade_planar_planar3] [--work DIR]
 """
@@ -14,35 +15,32 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from toolimit.cli import main as toolimit
+from toolimit.align.config import AlignmentConfig
 from toolimit.learn.shipped import shipped_task_path
 from toolimit.learn.task import task_from_pipeline
+from toolimit.pipeline import AlignSettings, TrajoptSettings, align_stage, trajopt_stage
+from toolimit.trajopt import TIME_SCALE_GRID
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: (tool, world, robot) -> (demonstration, extra `toolimit align` flags, extra `toolimit trajopt` flags).
-RECIPES: dict[tuple[str, str, str], tuple[str, list[str], list[str]]] = {
-    ("spade", "planar", "planar3"): ("spade_03", ["--candidates", "10"], ["--velocity-weight", "1e-4"]),
-    ("hammer", "planar", "planar3"): ("hammer_00", ["--candidates", "10"], ["--velocity-weight", "1e-4"]),
-    ("scythe", "planar", "panda"): ("scythe_00", ["--candidates", "10"], ["--velocity-weight", "1e-4"]),
-    ("spade", "3d", "panda"): ("spade_01", ["--candidates", "10"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
-    ("hammer", "3d", "panda"): ("hammer_00", ["--candidates", "5"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
-    ("scythe", "3d", "panda"): ("scythe_00", ["--candidates", "5"], ["--velocity-weight", "1e-4", "--time-scale", "auto"]),
+#: (tool, world, robot) -> (demonstration, alignment candidates, time scales the robot's selection tries).
+RECIPES: dict[tuple[str, str, str], tuple[str, int, tuple[float, ...]]] = {
+    ("spade", "planar", "planar3"): ("spade_03", 10, (1.0,)),
+    ("hammer", "planar", "planar3"): ("hammer_00", 10, (1.0,)),
+    ("scythe", "planar", "panda"): ("scythe_00", 10, (1.0,)),
+    ("spade", "3d", "panda"): ("spade_01", 10, TIME_SCALE_GRID),
+    ("hammer", "3d", "panda"): ("hammer_00", 5, TIME_SCALE_GRID),
+    ("scythe", "3d", "panda"): ("scythe_00", 5, TIME_SCALE_GRID),
 }
 
 
 def make_task(tool: str, world: str, robot: str, work: Path) -> Path:
-    """Run the pipeline for one recipe under ``work`` and save the task; returns its path."""
-    demo, align_flags, trajopt_flags = RECIPES[(tool, world, robot)]
+    """Run stages ii and iii for one recipe under ``work`` and save the task; returns its path."""
+    demo, candidates, time_scales = RECIPES[(tool, world, robot)]
     alignment, trajectory = work / f"{tool}_{world}_align", work / f"{tool}_{world}_{robot}_trajopt"
-    code = toolimit(["align", "--tool", tool, "--world", world, "--demo", str(ROOT / "data" / "demos" / f"{demo}.npz"),
-                     "--out", str(alignment), "--seed", "0", "--quiet", *align_flags])
-    if code != 0:
-        raise SystemExit(f"{tool}/{world}: alignment failed (exit {code})")
-    code = toolimit(["trajopt", "--robot", robot, "--tool", tool, "--alignment", str(alignment), "--select-by-robot",
-                     "--out", str(trajectory), "--quiet", *trajopt_flags])
-    if code != 0:
-        raise SystemExit(f"{tool}/{world}/{robot}: trajectory optimisation failed (exit {code})")
+    align_settings = AlignSettings(search=AlignmentConfig(candidates=candidates), seed=0)
+    align_stage(ROOT / "data" / "demos" / f"{demo}.npz", tool, world, alignment, align_settings, progress=False)
+    trajopt_stage(alignment, robot, trajectory, TrajoptSettings(time_scales=time_scales), progress=False)
     task = task_from_pipeline(alignment, trajectory)
     task.source.update(demo=f"data/demos/{demo}.npz", alignment="", trajectory="")
     path = task.save(shipped_task_path(tool, world, robot))

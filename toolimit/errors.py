@@ -24,9 +24,9 @@ class DemoError(InputError):
     """A demonstration is malformed: the message names the field, the shape or the value."""
 
 
-class InvalidLearningConfig(InputError):
-    """A learning setting no run can use; ``field`` names the setting, ``problem`` says what is wrong
-    (the command line names its flag instead)."""
+class InvalidSetting(InputError):
+    """A setting no run can use; ``field`` names the settings field, ``problem`` says what is wrong
+    (the command line names the field's flag instead)."""
 
     def __init__(self, field: str, problem: str) -> None:
         super().__init__(field, problem)
@@ -35,6 +35,16 @@ class InvalidLearningConfig(InputError):
 
     def __str__(self) -> str:
         return f"{self.field}: {self.problem}"
+
+
+class InvalidLearningConfig(InvalidSetting):
+    """A learning setting (:class:`toolimit.learn.training.LearningConfig`) no run can use."""
+
+
+class StageFoundNothing(ToolimitError):
+    """A pipeline stage ended without a result to hand on: no alignment candidate within the
+    sample budget, or no candidate whose robot replay earns a reward. Not bad input: the command
+    line exits with code 1 (more samples or another seed may find one)."""
 
 
 class InvalidSceneParameters(InputError):

@@ -14,6 +14,7 @@ own arguments. A script that uses workers needs the ``if __name__ == "__main__":
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
 from collections.abc import Callable, Generator, Iterable
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -24,6 +25,15 @@ from toolimit.interrupts import starting_processes
 Result = TypeVar("Result")
 #: Longest wait (s) for a stopped executor's manager thread to finish (:func:`stop_workers`).
 MANAGER_JOIN_S = 5.0
+
+
+#: Most worker processes used by default, however many cores the machine has.
+MAX_DEFAULT_WORKERS = 4
+
+
+def worker_count(requested: int | None) -> int:
+    """``requested`` workers, or one per CPU core up to :data:`MAX_DEFAULT_WORKERS` when None."""
+    return requested if requested is not None else max(1, min(MAX_DEFAULT_WORKERS, os.cpu_count() or 1))
 
 
 def ordered_results(

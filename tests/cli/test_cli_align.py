@@ -57,7 +57,7 @@ def assert_user_error(capsys, argv: list[str], fragment: str, out: Path) -> None
         (["--seed", "-1"], "--seed"),
         (["--rerun", "view.txt"], "--rerun"),
         (["--html", "view.txt"], "--html"),
-        (["--z-offset-std", "0"], "--z-offset-std"),
+        (["--z-offset-std", "-1"], "--z-offset-std"),
         (["--html", "view.html"], "3d worlds"),
     ],
 )

@@ -151,27 +151,27 @@ def test_an_unknown_method_is_a_one_line_error(tmp_path: Path, capsys: pytest.Ca
 def test_an_interrupted_step_stops_the_whole_reproduction(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from toolimit import cli
+    import signal
 
-    steps: list[list[str]] = []
-    real_main = cli.main
+    from toolimit.experiments import reproduce
+    from toolimit.interrupts import Interrupted
 
-    def interrupted_run(argv: list[str] | None = None) -> int:
-        if argv is not None and argv[0] == "run":
-            steps.append(argv)
-            return 130  # what a nested command returns after Ctrl-C
-        return real_main(argv)
+    steps: list[object] = []
 
-    monkeypatch.setattr(cli, "main", interrupted_run)
+    def interrupted_run(demo: object, *args: object, **kwargs: object) -> None:
+        steps.append(demo)
+        raise Interrupted(signal.SIGINT)  # what a stage raises after Ctrl-C, its checkpoint saved
+
+    monkeypatch.setattr(reproduce, "run_pipeline", interrupted_run)
     monkeypatch.chdir(REPO)
     demos = ["--demo", "data/demos/spade_00.npz", "--demo", "data/demos/spade_01.npz"]
-    assert real_main(["reproduce", *demos, "--out", str(tmp_path / "out"), "--quiet"]) == 130
+    assert toolimit(["reproduce", *demos, "--out", str(tmp_path / "out"), "--quiet"]) == 130
     assert len(steps) == 1, "the second experiment started after the first was interrupted"
     assert "toolimit reproduce: interrupted (SIGINT)" in capsys.readouterr().err
 
 
 def test_the_full_preset_measures_every_method_with_the_panda_and_the_pipeline_with_the_other_robots() -> None:
-    from toolimit.cli.reproduce import preset
+    from toolimit.experiments.reproduce import preset
 
     experiments = preset("full").experiments
     panda = [e for e in experiments if e.robot == "panda"]
@@ -192,7 +192,7 @@ def test_jobs_run_experiments_in_child_processes_with_the_same_cells_as_one_proc
     said = capsys.readouterr().out
     for name in (EXPERIMENT, EXPERIMENT.replace("spade_03", "spade_01")):
         assert f"[{name}] ended (exit 0)" in said
-        assert f"[{name}] toolimit run" in (out / "logs" / f"{name}.log").read_text()
+        assert f"[{name}] [learning] started" in (out / "logs" / f"{name}.log").read_text()
     for method in ("tool_only", "trajopt", "final"):
         key = f"{EXPERIMENT}-{method}.json"
         alone, in_child = CellResult.load(quick_results / "cells" / key), CellResult.load(out / "cells" / key)

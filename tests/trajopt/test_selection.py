@@ -51,7 +51,7 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
     trajectory, replayed in the planar scene, moves sand into the goal box."""
     _, alignment = spade_alignment
     out = tmp_path / "planar3"
-    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment), "--select-by-robot",
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment),
             "--velocity-weight", "1e-4", "--init", "hold", "--quiet", "--out", str(out)]
     assert main(argv) == 0, capsys.readouterr().err
     selection = json.loads((out / "selection.json").read_text())
@@ -73,7 +73,7 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
 def test_selection_keeps_the_time_scale_whose_robot_replay_earns_most(spade_alignment, tmp_path, capsys):
     _, alignment = spade_alignment
     out = tmp_path / "planar3"
-    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment), "--select-by-robot",
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment),
             "--velocity-weight", "1e-4", "--init", "hold", "--starts", "2", "--time-scale", "2,1", "--quiet",
             "--out", str(out)]
     assert main(argv) == 0, capsys.readouterr().err
@@ -95,17 +95,9 @@ def test_selection_is_the_same_with_two_worker_processes(spade_alignment, tmp_pa
     records = []
     for workers in ("1", "2"):
         out = tmp_path / f"workers{workers}"
-        argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment), "--select-by-robot",
+        argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment),
                 "--velocity-weight", "1e-4", "--init", "hold", "--starts", "2", "--quiet", "--workers", workers,
                 "--out", str(out)]
         assert main(argv) == 0, capsys.readouterr().err
         records.append(json.loads((out / "selection.json").read_text()))
     assert records[0] == records[1]  # same machine, same process type: bit for bit
-
-
-def test_selection_needs_an_alignment(tmp_path, capsys, video_demos_dir):
-    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--poses", str(video_demos_dir / "spade_video1_aligned.npz"),
-            "--select-by-robot", "--out", str(tmp_path / "x")]
-    assert main(argv) == 2
-    assert "--select-by-robot" in capsys.readouterr().err
-    assert not (tmp_path / "x").exists()

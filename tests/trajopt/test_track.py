@@ -118,17 +118,3 @@ def test_roll_symmetric_tool_tries_the_turned_targets():
     assert result.statistics.roll_variant == 1
     # errors are measured against the chosen variant (the other one is pi away)
     assert np.median(result.rotation_error) < 0.3
-
-
-def test_library_defaults_are_the_clis():
-    import argparse
-
-    from toolimit.cli import build_parser
-    from toolimit.trajopt import TrackOptions
-
-    args = build_parser().parse_args(["trajopt", "--robot", "panda", "--tool", "spade", "--poses", "p.npz",
-                                      "--out", "o"])
-    assert isinstance(args, argparse.Namespace) and args.init == "both"
-    options = TrackOptions()
-    assert options.initialisations == ("hold", "rollout") and options.starts == args.starts
-    assert options.weights.velocity == args.velocity_weight and options.weights.posture == args.posture_weight

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.errors import InputError
+from toolimit.errors import InvalidSetting
 
 #: The plane a planar scene lives in, keyed by (tool, world): the demonstration is projected onto
 #: it before alignment ("xz": vertical plane, "xy": horizontal plane). Worlds not listed (3D) keep
@@ -92,17 +92,17 @@ class AlignmentConfig:
         for name in ("samples", "candidates", "replays", "max_attempts", "chunk_size"):
             value = getattr(self, name)
             if not (isinstance(value, (int, np.integer)) and value > 0):
-                raise InputError(f"{name}: expected a positive integer, got {value!r}")
+                raise InvalidSetting(name, f"expected a positive integer, got {value!r}")
         if not (isinstance(self.screen_replays, (int, np.integer)) and self.screen_replays >= 0):
-            raise InputError(f"screen_replays: expected a non-negative integer, got {self.screen_replays!r}")
+            raise InvalidSetting("screen_replays", f"expected a non-negative integer, got {self.screen_replays!r}")
         for name in ("z_offset_std", "element_std", "ground_tolerance"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
-                raise InputError(f"{name}: expected a non-negative number, got {value!r}")
+                raise InvalidSetting(name, f"expected a non-negative number, got {value!r}")
         if not self.scales or not all(np.isfinite(s) and s > 0 for s in self.scales):
-            raise InputError(f"scales: expected positive numbers, got {self.scales!r}")
+            raise InvalidSetting("scales", f"expected positive numbers, got {self.scales!r}")
         if not 0.0 < self.keypoint_fraction <= 1.0:
-            raise InputError(f"keypoint_fraction: expected a value in (0, 1], got {self.keypoint_fraction}")
+            raise InvalidSetting("keypoint_fraction", f"expected a value in (0, 1], got {self.keypoint_fraction}")
 
     def element_covariance(self, plane: str | None) -> np.ndarray:
         """(3, 3) covariance Sigma of the element mixture, m^2, world frame."""

@@ -18,11 +18,20 @@ import numpy as np
 from toolimit.align.search import AlignmentResult, Candidate
 from toolimit.artifacts import save_json, save_npz
 from toolimit.rotations import quaternions_wxyz
+from toolimit.scenes.base import pack_scene_params
 
 ALIGNMENT_JSON = "alignment.json"
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
 #: Every kept candidate's tool poses and parameters, for selection by robot execution (paper).
 CANDIDATES_NPZ = "candidates.npz"
+#: The search's progress in the output folder while it runs (removed when it ends).
+CHECKPOINT_JSON = "alignment_checkpoint.json"
+
+
+def alignment_finished(folder: str | Path) -> bool:
+    """An alignment in ``folder`` finished with candidates (no checkpoint of an interrupted search left)."""
+    folder = Path(folder)
+    return (folder / CANDIDATES_NPZ).is_file() and not (folder / CHECKPOINT_JSON).is_file()
 
 
 def continuous_quaternions_wxyz(rotation: np.ndarray) -> np.ndarray:
@@ -83,9 +92,7 @@ def aligned_demo_arrays(result: AlignmentResult, candidate: Candidate) -> dict[s
         "keypoints": result.keypoints,
         "reward": np.float64(candidate.reward),
     }
-    for name, value in candidate.sample.params.items():
-        arrays[f"param_{name}"] = np.asarray(value, dtype=float)
-    return arrays
+    return arrays | pack_scene_params(candidate.sample.params)
 
 
 def candidates_arrays(result: AlignmentResult) -> dict[str, Any]:
@@ -100,11 +107,11 @@ def candidates_arrays(result: AlignmentResult) -> dict[str, Any]:
         "alignment_reward": np.array([candidate.reward for candidate in result.candidates]),
         "sample_index": np.array([candidate.index for candidate in result.candidates]),
     }
-    for name in result.candidates[0].sample.params:
-        arrays[f"param_{name}"] = np.stack(
-            [np.asarray(candidate.sample.params[name], dtype=float) for candidate in result.candidates]
-        )
-    return arrays
+    names = result.candidates[0].sample.params
+    stacked = {
+        name: np.stack([np.asarray(c.sample.params[name], dtype=float) for c in result.candidates]) for name in names
+    }
+    return arrays | pack_scene_params(stacked)
 
 
 def write_alignment(result: AlignmentResult, out_dir: str | Path, demo_path: str, **extra: Any) -> list[Path]:

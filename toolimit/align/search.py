@@ -303,7 +303,7 @@ def align(
             interrupted) and from which it resumes when the file was made with the same demo,
             scene, seed and settings; it is removed when the search ends.
 
-    Raises :class:`SearchInterrupted` (a KeyboardInterrupt) on SIGINT or SIGTERM, after saving the
+    Raises InputError for a demonstration of another tool, and :class:`SearchInterrupted` (a KeyboardInterrupt) on SIGINT or SIGTERM, after saving the
     checkpoint (if any sample finished) and ending the worker processes; a second signal during
     that cleanup is ignored.
 
@@ -315,6 +315,8 @@ def align(
     config = config or AlignmentConfig()
     if not (isinstance(workers, int) and workers >= 1):
         raise InputError(f"workers: expected a positive integer, got {workers!r}")
+    if demo.tool != tool:
+        raise InputError(f"the demonstration shows the {demo.tool}, not the {tool}: align it in a {demo.tool} scene")
     started = time.perf_counter()
     cleaning = None
     if clean:

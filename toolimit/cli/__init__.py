@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 from toolimit import __version__, interrupts
-from toolimit.errors import InputError, ToolimitError
+from toolimit.errors import InputError, StageFoundNothing, ToolimitError
 
 if TYPE_CHECKING:
     from toolimit.trajopt import PoseTargets
@@ -127,26 +127,6 @@ def add_seed_argument(parser: argparse.ArgumentParser, what: str = "random seed"
     parser.add_argument("--seed", type=int, default=default, help=f"{what} (default: {default})")
 
 
-def add_workers_argument(parser: argparse.ArgumentParser) -> None:
-    """``--workers``: processes that share the work (default: :func:`worker_count`)."""
-    parser.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="worker processes (default: up to 4, one per CPU core); results do not depend on it",
-    )
-
-
-def worker_count(requested: int | None) -> int:
-    """``--workers`` as given, or one per CPU core up to 4; CliError unless >= 1."""
-    import os
-
-    workers = requested if requested is not None else max(1, min(4, os.cpu_count() or 1))
-    if workers < 1:
-        raise CliError(f"--workers: must be an integer >= 1, got {workers}")
-    return workers
-
-
 def add_out_argument(parser: argparse.ArgumentParser, what: str = "output folder") -> None:
     """``--out`` (required): where a command writes, ``what`` for the help."""
     parser.add_argument("--out", required=True, type=Path, help=what)
@@ -194,6 +174,9 @@ def main(argv: list[str] | None = None) -> int:
     except interrupts.Interrupted as stop:
         print(f"toolimit {args.command}: interrupted ({stop.signal_name})", file=sys.stderr)
         return stop.exit_code
+    except StageFoundNothing as nothing:
+        print(f"toolimit {args.command}: {nothing}", file=sys.stderr)
+        return 1
     except (ToolimitError, OSError) as error:
         print(f"toolimit {args.command}: error: {error}", file=sys.stderr)
         return 2

@@ -1,7 +1,8 @@
 """``toolimit align``: find scene parameters under which a demonstration reaches the goal.
 
-Writes ``DIR/alignment.json`` (the search's record) and ``DIR/aligned_demo.npz`` (the best
-candidate's aligned motion); optionally a rerun recording (``--rerun``) and, in the 3d world, the
+The command line of :func:`toolimit.pipeline.align_stage`; its flags are the fields of
+:class:`toolimit.pipeline.AlignSettings`. Writes ``DIR/alignment.json`` (the search's record),
+``DIR/candidates.npz`` and ``DIR/aligned_demo.npz`` (the best candidate's aligned motion); optionally a rerun recording (``--rerun``) and, in the 3d world, the
 best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (SIGINT,
 e.g. Ctrl-C: exit code 130; SIGTERM: 143) saves ``DIR/alignment_checkpoint.json`` if any sample
 finished; the same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
@@ -18,20 +19,18 @@ from toolimit.cli import (
     CliError,
     add_out_argument,
     add_scene_arguments,
-    add_seed_argument,
-    add_workers_argument,
-    check_count,
     check_output_file,
     check_output_folder,
     check_scene,
     check_writable_folder,
-    worker_count,
 )
+from toolimit.cli.flags import Flag, add_flags, apply_flags, show_workers
+from toolimit.pipeline.settings import AlignSettings
 
-DEFAULT_SAMPLES = 20_000
-#: The search's progress in the output folder while it runs (removed when it ends).
-CHECKPOINT_JSON = "alignment_checkpoint.json"
-DEFAULT_CANDIDATES = 5
+#: The search's budget, shared with ``toolimit run`` (fields of :class:`AlignSettings`).
+SEARCH_FLAGS = (Flag("search.samples"), Flag("search.candidates"), Flag("search.z_offset_std"))
+#: Every flag of ``toolimit align`` built from its settings.
+ALIGN_FLAGS = (*SEARCH_FLAGS, Flag("seed"), Flag("workers", show=show_workers), Flag("clean"))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -48,15 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         type=Path,
         help="demonstration file (project .npz, real aligned .npz or estimator .pkl)",
     )
-    parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES, help="sample budget (default: 20000)")
-    parser.add_argument(
-        "--candidates",
-        type=int,
-        default=DEFAULT_CANDIDATES,
-        help=f"stop after this many samples with a reward (default: {DEFAULT_CANDIDATES})",
-    )
-    add_seed_argument(parser)
-    add_workers_argument(parser)
+    add_flags(parser, ALIGN_FLAGS, {"": AlignSettings()})
     add_out_argument(parser)
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument(
@@ -65,27 +56,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="3d world only: also save the best candidate's replay as a self-contained meshcat page (.html)",
     )
-    parser.add_argument(
-        "--z-offset-std",
-        type=float,
-        default=None,
-        help="spread of the sampled vertical offset p_z, m (default 0.1; the paper's 0.5 suits recordings "
-        "whose heights are not measured from the ground)",
-    )
-    parser.add_argument("--no-clean", action="store_true", help="use the demo as loaded, without cleaning")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
 
-def _check_arguments(args: argparse.Namespace) -> int:
-    """Validate before any work; returns the worker count."""
+def _check_arguments(args: argparse.Namespace) -> AlignSettings:
+    """Validate before any work; returns the settings."""
     check_scene(args.tool, args.world)
-    check_count("--samples", args.samples)
-    check_count("--candidates", args.candidates)
-    if args.z_offset_std is not None and not args.z_offset_std > 0:
-        raise CliError(f"--z-offset-std: must be a positive number of metres, got {args.z_offset_std}")
-    check_count("--seed", args.seed, minimum=0)
-    workers = worker_count(args.workers)
+    settings = apply_flags(AlignSettings(), ALIGN_FLAGS, args)
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
     check_output_folder(args.out, "--out")
@@ -96,39 +74,20 @@ def _check_arguments(args: argparse.Namespace) -> int:
         if args.world != "3d":
             raise CliError(f"--html: the meshcat replay draws the 3d worlds, not the {args.world} world")
         check_writable_folder(args.html.parent, "--html")
-    return workers
+    return settings
 
 
 def run(args: argparse.Namespace) -> int:
-    from toolimit.align.config import AlignmentConfig
-    from toolimit.align.outputs import (
-        ALIGNED_DEMO_NPZ,
-        ALIGNMENT_JSON,
-        CANDIDATES_NPZ,
-        write_alignment,
-    )
-    from toolimit.align.search import SearchInterrupted, align
-    from toolimit.demos import load_demo
+    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, CANDIDATES_NPZ, CHECKPOINT_JSON
+    from toolimit.align.search import SearchInterrupted
+    from toolimit.pipeline.stages import align_stage, describe_alignment
 
-    workers = _check_arguments(args)
-    demo = load_demo(args.demo, tool=args.tool)  # also names the tool of files that do not store it
-    settings = {} if args.z_offset_std is None else {"z_offset_std": args.z_offset_std}
-    config = AlignmentConfig(samples=args.samples, candidates=args.candidates, **settings)
+    settings = _check_arguments(args)
     checkpoint = args.out / CHECKPOINT_JSON
     if checkpoint.is_file():
         print(f"found {checkpoint}: the search resumes from it if it was made with the same settings")
     try:
-        result = align(
-            demo,
-            args.tool,
-            args.world,
-            config,
-            seed=args.seed,
-            workers=workers,
-            progress=not args.quiet,
-            checkpoint=checkpoint,
-            clean=not args.no_clean,
-        )
+        result = align_stage(args.demo, args.tool, args.world, args.out, settings, progress=not args.quiet)
     except SearchInterrupted as stop:
         found = f"{stop.samples_tried} samples examined, {stop.candidates} candidate(s)"
         if stop.checkpoint is not None:
@@ -140,39 +99,17 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(f"interrupted ({stop.signal_name}) before any sample finished: nothing was saved", file=sys.stderr)
         return stop.exit_code
-    write_alignment(result, args.out, str(args.demo), cleaned=not args.no_clean, workers=workers)
-    if result.cleaning is not None:
-        print(
-            f"cleaned demo: {len(result.cleaning.replaced_frames)} of {demo.n_frames} frames replaced "
-            f"({len(result.cleaning.head_replaced_frames)} of them with the head's position)"
-        )
-    rejected = result.samples_rejected / max(result.samples_tried, 1)
-    print(
-        f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples "
-        f"({rejected:.0%} rejected), {result.wall_time_s:.1f} s with {workers} worker(s)"
-    )
+    for line in describe_alignment(result):
+        print(line)
     if args.rerun is not None:
         from toolimit.viz.rerun_alignment import save_alignment_recording
 
         written = save_alignment_recording(result, args.rerun)
         print(f"rerun recording: {args.rerun}" if written else "rerun recording skipped (RERUN=off)")
-    best = result.best
-    if args.html is not None and best is not None:
+    if args.html is not None:
         from toolimit.viz.meshcat_alignment import save_alignment_html
 
         print(f"meshcat replay of the best candidate: {save_alignment_html(result, args.html)}")
-    if best is None:
-        print(
-            f"no candidate: no sample earned a goal reward within {args.samples} samples; "
-            f"wrote {args.out / ALIGNMENT_JSON} (empty candidate list), no {ALIGNED_DEMO_NPZ}. "
-            "Try more --samples or another --seed.",
-            file=sys.stderr,
-        )
-        return 1
-    print(
-        f"best: sample {best.index}, mean goal reward {best.reward:.3f} "
-        f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m)"
-    )
     robot = "panda" if args.world == "3d" else "planar3"
     print(
         f"wrote {args.out / ALIGNMENT_JSON}, {args.out / CANDIDATES_NPZ} and {args.out / ALIGNED_DEMO_NPZ}; next: "

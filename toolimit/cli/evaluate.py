@@ -20,13 +20,15 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from toolimit.cli import CliError, add_seed_argument, check_output_file, check_writable_folder
+from toolimit.cli import CliError, check_output_file, check_writable_folder
+from toolimit.cli.flags import Flag, add_flags, apply_flags
+from toolimit.pipeline.settings import EvaluationSettings
 
 if TYPE_CHECKING:
-    from toolimit.learn.evaluate import Evaluation
     from toolimit.learn.task import LearningTask
 
-EVALUATION_JSON = "evaluation.json"
+#: Every flag of ``toolimit evaluate`` built from its settings.
+EVALUATION_FLAGS = (Flag("episodes"), Flag("seed"))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -34,8 +36,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "evaluate", help="evaluate a learned policy over many seeds", description=__doc__.splitlines()[0]
     )
     parser.add_argument("--policy", required=True, type=Path, help="`toolimit learn` output folder")
-    parser.add_argument("--episodes", type=int, default=20, help="episodes per mode (default: 20)")
-    add_seed_argument(parser, "seed of the evaluation episodes", default=1000)
+    add_flags(parser, EVALUATION_FLAGS, {"": EvaluationSettings()})
     parser.add_argument("--out", type=Path, default=None, help="JSON report (default: POLICY/evaluation.json)")
     parser.add_argument(
         "--heat-map", type=Path, default=None, help="also write the goal-box heat map to this .svg (spades)"
@@ -45,31 +46,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def evaluation_record(policy_dir: Path, episodes: int, seed: int) -> tuple[dict, Evaluation, LearningTask]:
-    """Deterministic and stochastic evaluations of the policy in ``policy_dir``: the JSON record,
-    the deterministic evaluation (its joint trajectories serve the export) and the task."""
-    from toolimit.learn.evaluate import evaluate
-    from toolimit.learn.training import load_policy
-
-    model, task = load_policy(policy_dir)
-    deterministic = evaluate(model, task, episodes, deterministic=True, seed=seed)
-    stochastic = evaluate(model, task, episodes, deterministic=False, seed=seed)
-    record = {
-        "tool": task.tool,
-        "world": task.world,
-        "robot": task.robot,
-        "seed": seed,
-        **deterministic.record(),
-        "stochastic": stochastic.record(),
-    }
-    return record, deterministic, task
-
-
 def run(args: argparse.Namespace) -> int:
     from toolimit.artifacts import save_json
+    from toolimit.pipeline.stages import EVALUATION_JSON, evaluate_stage
 
-    if args.episodes < 1:
-        raise CliError(f"--episodes: must be >= 1, got {args.episodes}")
+    settings = apply_flags(EvaluationSettings(), EVALUATION_FLAGS, args)
     if not args.policy.is_dir():
         raise CliError(f"--policy: no such folder: {args.policy}")
     out = args.out or args.policy / EVALUATION_JSON
@@ -80,18 +61,19 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.rerun, "--rerun", ".rrd")
     if args.grid < 2:
         raise CliError(f"--grid: must be an integer >= 2, got {args.grid}")
-    record, _, task = evaluation_record(args.policy, args.episodes, args.seed)
+    evaluation = evaluate_stage(args.policy, settings)
+    record = evaluation.record
     if args.heat_map is not None:
-        record["heat_map"] = _heat_map(args, task)
+        record["heat_map"] = _heat_map(args, evaluation.task, settings.seed)
     save_json(out, record)
     print(
         f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "
-        f"(stochastic) over {args.episodes} episodes; goal reward {record['goal_reward_mean']:.1f}; wrote {out}"
+        f"(stochastic) over {settings.episodes} episodes; goal reward {record['goal_reward_mean']:.1f}; wrote {out}"
     )
     return 0
 
 
-def _heat_map(args: argparse.Namespace, task: LearningTask) -> dict:
+def _heat_map(args: argparse.Namespace, task: LearningTask, seed: int) -> dict:
     """Compute the heat map of ``args.policy``, write its SVG (and rerun recording); its record."""
     from toolimit.artifacts import save_text
     from toolimit.learn.heat_map import goal_box_heat_map
@@ -100,7 +82,7 @@ def _heat_map(args: argparse.Namespace, task: LearningTask) -> dict:
     from toolimit.viz.svg_heat_map import heat_map_svg
 
     model, _ = load_policy(args.policy)
-    heat_map = goal_box_heat_map(model, task, grid=args.grid, seed=args.seed)
+    heat_map = goal_box_heat_map(model, task, grid=args.grid, seed=seed)
     kind = "learned with ADR" if heat_map.observes_box else "learned without ADR (the box is not observed)"
     save_text(args.heat_map, heat_map_svg(heat_map, f"{task.robot} {task.tool} ({task.world}), policy {kind}"))
     if args.rerun is not None:

@@ -15,15 +15,19 @@ import argparse
 from pathlib import Path
 
 from toolimit.cli import check_writable_folder
+from toolimit.cli.flags import Flag, add_flags, apply_flags
 from toolimit.deploy import (
     SUPPORTED_ROBOTS,
     export_trajectory,
     load_trajectory,
     published_limits,
 )
-from toolimit.deploy.export import DEFAULT_RATE_HZ, SUMMARY_JSON, TRAJECTORY_CSV
-from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
+from toolimit.deploy.export import SUMMARY_JSON, TRAJECTORY_CSV
+from toolimit.pipeline.settings import ExportSettings
 from toolimit.trajopt.result import TRAJECTORY_NPZ
+
+#: Every flag of ``toolimit export`` built from its settings.
+EXPORT_FLAGS = (Flag("rate"), Flag("subdivisions"))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -43,18 +47,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--robot", required=True, help=f"robot whose published limits apply ({', '.join(SUPPORTED_ROBOTS)})"
     )
     parser.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
-    parser.add_argument("--rate", type=float, default=DEFAULT_RATE_HZ, help="command rate in Hz (default 1000)")
-    parser.add_argument(
-        "--subdivisions",
-        type=int,
-        default=DEFAULT_SUBDIVISIONS,
-        help="pieces per step between optimised samples: more keeps closer to them at sharp turns, "
-        f"and turns there more slowly (default {DEFAULT_SUBDIVISIONS})",
-    )
+    add_flags(parser, EXPORT_FLAGS, {"": ExportSettings()})
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    settings = apply_flags(ExportSettings(), EXPORT_FLAGS, args)
     published_limits(args.robot)  # an unsupported robot is refused before anything is read
     check_writable_folder(args.out, "--out")
     trajectory = load_trajectory(args.trajectory)
@@ -62,8 +60,8 @@ def run(args: argparse.Namespace) -> int:
         trajectory,
         args.robot,
         args.out,
-        rate=args.rate,
-        subdivisions=args.subdivisions,
+        rate=settings.rate,
+        subdivisions=settings.subdivisions,
         source=str(args.trajectory / TRAJECTORY_NPZ),
     )
     ratios = ", ".join(f"{check.quantity} {check.ratio:.2f}" for check in plan.checks if check.quantity != "position")
@@ -75,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     )
     print(f"peak |value| / limit: {ratios}; every position inside its limits")
     print(
-        f"wrote {args.out / TRAJECTORY_CSV} ({len(plan.samples.times)} samples at {args.rate:g} Hz) "
+        f"wrote {args.out / TRAJECTORY_CSV} ({len(plan.samples.times)} samples at {settings.rate:g} Hz) "
         f"and {args.out / SUMMARY_JSON}"
     )
     return 0

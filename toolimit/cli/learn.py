@@ -13,116 +13,50 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from toolimit.cli import (
     CliError,
     add_out_argument,
-    add_seed_argument,
     check_output_file,
     check_output_folder,
 )
+from toolimit.cli.flags import Flag, add_flags, apply_flags
+from toolimit.learn.ppo import PRESETS
+from toolimit.learn.simulator import REWARDS
+from toolimit.pipeline.settings import WORLD_PRESETS, PipelineSettings
 
-
-def add_learning_arguments(parser: argparse.ArgumentParser, timesteps: int | None) -> None:
-    """The budget and learner flags shared by ``toolimit learn`` and ``toolimit run``."""
-    from toolimit.learn.adr import EVERY as ADR_EVERY
-    from toolimit.learn.ppo import PRESETS
-    from toolimit.learn.simulator import REWARDS
-
-    parser.add_argument(
-        "--timesteps",
-        type=int,
-        default=timesteps,
-        help=f"PPO environment steps (default: {timesteps or '300000 planar, 1500000 3d'})",
-    )
-    parser.add_argument("--envs", type=int, default=16, help="instances stepped together (default: 16)")
-    parser.add_argument(
-        "--preset",
-        choices=sorted(PRESETS),
-        default="authors",
-        help="PPO settings: the authors' or the project's looser gradient clip (default: authors)",
-    )
-    parser.add_argument(
-        "--no-clone",
-        action="store_true",
-        help="no behaviour cloning: sparse-reward PPO from a random policy (learned std)",
-    )
-    parser.add_argument(
-        "--clone-rollouts",
-        type=int,
-        default=8,
-        help="tracking-controller rollouts to clone (1 = the authors'; default: 8)",
-    )
-    parser.add_argument(
-        "--clone-noise",
-        type=float,
-        default=0.3,
-        help="action noise of rollouts 2.. (fraction of the velocity limit), relabelled by the "
-        "controller (default: 0.3)",
-    )
-    parser.add_argument("--clone-steps", type=int, default=6000, help="cloning Adam steps (default: 6000)")
-    parser.add_argument(
-        "--value-steps",
-        type=int,
-        default=2000,
-        help="Adam steps of the value network's warm-up after cloning (default: 2000)",
-    )
-    parser.add_argument(
-        "--action-std",
-        type=float,
-        default=0.2,
-        help="the policy's standard deviation on every joint, rad/s: fixed after cloning, the start of the "
-        "learned one with --no-clone (default: 0.2, the authors')",
-    )
-    parser.add_argument(
-        "--reward",
-        choices=REWARDS,
-        default="sparse",
-        help="sparse: the paper's goal reward; dense: plus the appendix's shaping, the dense-reward "
-        "baseline (default: sparse)",
-    )
-    parser.add_argument(
-        "--adr",
-        action="store_true",
-        help="domain randomisation of the goal box (spades): the box drawn per episode inside bounds grown from "
-        "the aligned position by the authors' boundary test, and observed by the policy",
-    )
-    parser.add_argument(
-        "--adr-every",
-        type=int,
-        default=ADR_EVERY,
-        help=f"with --adr: PPO updates between two boundary tests (default: {ADR_EVERY})",
-    )
-    parser.add_argument("--checkpoint-every", type=int, default=5, help="PPO updates between checkpoints (default: 5)")
-    add_seed_argument(parser)
-
-
-def learning_config(args: argparse.Namespace, scene_kwargs: dict | None = None):
-    """The LearningConfig of the flags of :func:`add_learning_arguments`; CliError naming the flag of a
-    value the config refuses."""
-    from toolimit.errors import InvalidLearningConfig
+if TYPE_CHECKING:
+    from toolimit.learn.task import LearningTask
     from toolimit.learn.training import LearningConfig
 
-    try:
-        return LearningConfig(
-            timesteps=args.timesteps,
-            envs=args.envs,
-            preset=args.preset,
-            clone=not args.no_clone,
-            clone_rollouts=args.clone_rollouts,
-            clone_noise=args.clone_noise,
-            clone_steps=args.clone_steps,
-            value_steps=args.value_steps,
-            action_std=args.action_std,
-            checkpoint_every=args.checkpoint_every,
-            seed=args.seed,
-            scene_kwargs=scene_kwargs,
-            reward=args.reward,
-            adr=args.adr,
-            adr_every=args.adr_every,
-        )
-    except InvalidLearningConfig as error:  # every field set here has the flag --field-name
-        raise CliError(f"--{error.field.replace('_', '-')}: {error.problem}") from None
+#: The budget and learner flags, shared by ``toolimit learn`` and ``toolimit run`` (fields of
+#: :class:`~toolimit.learn.training.LearningConfig`).
+LEARNING_FLAGS = (
+    Flag("timesteps"),
+    Flag("envs"),
+    Flag("preset", choices=tuple(sorted(PRESETS))),
+    Flag("clone"),
+    Flag("clone_rollouts"),
+    Flag("clone_noise"),
+    Flag("clone_steps"),
+    Flag("value_steps"),
+    Flag("action_std"),
+    Flag("reward", choices=REWARDS),
+    Flag("adr"),
+    Flag("adr_every"),
+    Flag("checkpoint_every"),
+    Flag("seed"),
+)
+
+
+def learning_config(args: argparse.Namespace, world: str | None = None) -> LearningConfig:
+    """The LearningConfig of the flags: ``world``'s preset (the plain defaults when None) with the
+    flags given; CliError naming the flag of a value the config refuses."""
+    from toolimit.learn.training import LearningConfig
+
+    base = LearningConfig() if world is None else PipelineSettings.for_world(world).learning
+    return apply_flags(base, LEARNING_FLAGS, args)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -136,13 +70,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--trajectory", type=Path, help="`toolimit trajopt` output folder (with --alignment)")
     parser.add_argument("--robot", default=None, help="with --env: another robot's shipped task")
     add_out_argument(parser)
-    add_learning_arguments(parser, timesteps=200_000)
+    add_flags(parser, LEARNING_FLAGS, {world: PipelineSettings.for_world(world).learning for world in WORLD_PRESETS})
     parser.add_argument("--rerun", type=Path, default=None, help="also save the learning curves as a rerun .rrd")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run)
 
 
-def load_task(args: argparse.Namespace):
+def load_task(args: argparse.Namespace) -> LearningTask:
     """The LearningTask named by --task, --alignment/--trajectory or --env."""
     from toolimit.learn import LearningTask, shipped_task, task_from_pipeline
     from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, env_id
@@ -159,26 +93,17 @@ def load_task(args: argparse.Namespace):
     return shipped_task(*ids[args.env], robot=args.robot)
 
 
-def check_adr(adr: bool, tool: str, world: str) -> None:
-    """With --adr, InputError (one line) unless the tool's scene has a goal box to move."""
-    if adr:
-        from toolimit.learn.adr import goal_box_spec
-        from toolimit.scenes.registry import make_scene
-
-        goal_box_spec(make_scene(tool, world))
-
-
 def run(args: argparse.Namespace) -> int:
     from toolimit.learn.ppo import CHECKPOINT_STATE
     from toolimit.learn.training import CURVE_JSONL, learn_policy
 
-    config = learning_config(args)
+    learning_config(args)  # checks the flags before any work
     if args.trajectory is not None and args.alignment is None:
         raise CliError("--trajectory: needs --alignment DIR")
     check_output_folder(args.out, "--out")
     check_output_file(args.rerun, "--rerun", ".rrd")
     task = load_task(args)
-    check_adr(args.adr, task.tool, task.world)
+    config = learning_config(args, task.world)
     try:
         outcome = learn_policy(task, args.out, config, progress=not args.quiet)
     except KeyboardInterrupt as stop:  # interrupts.Interrupted (SIGINT, SIGTERM) or a plain Ctrl-C

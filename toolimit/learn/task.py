@@ -25,7 +25,7 @@ import numpy as np
 from toolimit.artifacts import load_npz, save_npz
 from toolimit.errors import InputError
 from toolimit.robots import RobotModel
-from toolimit.scenes.base import Scene, SceneParams
+from toolimit.scenes.base import Scene, SceneParams, pack_scene_params, unpack_scene_params
 from toolimit.tools import ToolPose
 from toolimit.trajopt.execution import resample_joints
 from toolimit.trajopt.result import TrajectoryResult
@@ -86,7 +86,7 @@ class LearningTask:
             "control_dt": np.float64(self.control_dt),
             "time_scale": np.float64(self.time_scale),
         }
-        arrays |= {f"param_{name}": np.asarray(value, dtype=float) for name, value in self.params.items()}
+        arrays |= pack_scene_params(self.params)
         arrays |= {f"source_{key}": np.str_(value) for key, value in self.source.items()}
         save_npz(path, **arrays)
         return path
@@ -111,9 +111,7 @@ class LearningTask:
             raise TaskFileError(
                 f"{path}: horizon {horizon} is shorter than the reference ({len(reference_q) - 1} steps)"
             )
-        params = {
-            key.removeprefix("param_"): _param_value(value) for key, value in data.items() if key.startswith("param_")
-        }
+        params = unpack_scene_params(data)
         source = {key.removeprefix("source_"): str(value) for key, value in data.items() if key.startswith("source_")}
         return cls(
             tool=str(data["tool"]),
@@ -128,10 +126,6 @@ class LearningTask:
             time_scale=float(data["time_scale"]),
             source=source,
         )
-
-
-def _param_value(value: np.ndarray) -> np.ndarray | float:
-    return float(value) if value.ndim == 0 else np.asarray(value, dtype=float)
 
 
 def success_horizon(
@@ -180,7 +174,7 @@ def task_from_trajectory(
         world=world,
         robot=robot.name,
         joint_names=tuple(robot.joint_names),
-        params={name: _param_value(np.asarray(value, dtype=float)) for name, value in params.items()},
+        params=unpack_scene_params(pack_scene_params(params)),
         base=np.asarray(trajectory.base, dtype=float),
         reference_q=reference_q,
         horizon=horizon,
@@ -193,45 +187,45 @@ def task_from_trajectory(
 def task_from_pipeline(
     alignment_dir: str | os.PathLike[str], trajectory_dir: str | os.PathLike[str], seed: int = 0
 ) -> LearningTask:
-    """The task of a finished pipeline: ``toolimit align`` output and ``toolimit trajopt`` output.
+    """The task of a finished pipeline: stage iii's trajectory in the scene it was tracked in.
 
-    The scene parameters are those of the candidate the trajectory tracks: the one in
-    ``selection.json`` when trajopt selected by robot execution, else the alignment's best
-    (``aligned_demo.npz``). TaskFileError names a missing file or a tool that does not match.
+    The scene is the alignment candidate the trajectory records (``TrajectoryResult.scene``), read
+    back from ``alignment_dir`` and checked against it. TaskFileError names a missing file, a
+    trajectory that records no scene (tracked from poses alone), another tool, or a trajectory
+    tracked in another alignment (its candidate's scene parameters differ from ``alignment_dir``'s).
     """
-    import json
-
-    from toolimit.align.outputs import ALIGNED_DEMO_NPZ, CANDIDATES_NPZ
     from toolimit.robots import make_robot
     from toolimit.scenes.registry import make_scene
-    from toolimit.trajopt.selection import SELECTION_JSON, load_candidates
+    from toolimit.trajopt.selection import load_candidates
 
     alignment_dir, trajectory_dir = Path(alignment_dir), Path(trajectory_dir)
     try:
         trajectory = TrajectoryResult.load(trajectory_dir)
+        tool, world, candidates = load_candidates(alignment_dir)
     except (OSError, ValueError, KeyError) as error:
         raise TaskFileError(str(error)) from None
-    selection_file = trajectory_dir / SELECTION_JSON
-    if selection_file.is_file():
-        best = json.loads(selection_file.read_text())["best"]
-        tool, world, candidates = load_candidates(alignment_dir / CANDIDATES_NPZ)
-        params = candidates[int(best)].params
-        candidate = str(best)
-    else:
-        demo_file = alignment_dir / ALIGNED_DEMO_NPZ
-        if not demo_file.is_file():
-            raise TaskFileError(f"{demo_file}: no such file (run `toolimit align` first)")
-        arrays = load_npz(demo_file, TaskFileError, required=("tool", "scene_world"))
-        tool, world = str(arrays["tool"]), str(arrays["scene_world"])
-        params = {
-            k.removeprefix("param_"): _param_value(value) for k, value in arrays.items() if k.startswith("param_")
-        }
-        candidate = "best"
+    scene = trajectory.scene
+    if scene is None:
+        raise TaskFileError(
+            f"{trajectory_dir}: the trajectory records no scene (it was tracked from poses, not from an "
+            "alignment's candidates): track it with `toolimit trajopt --alignment DIR`"
+        )
     if tool != trajectory.tool:
         raise TaskFileError(
             f"{trajectory_dir}: the trajectory is for the {trajectory.tool}, "
             f"the alignment in {alignment_dir} for the {tool}"
         )
+    k = scene.candidate
+    if world != scene.world or k >= len(candidates) or not _same_params(candidates[k].params, scene.params):
+        raise TaskFileError(
+            f"{trajectory_dir}: the trajectory was tracked in candidate {k} of another alignment than "
+            f"{alignment_dir} (its scene parameters differ): pair it with the alignment it was tracked from"
+        )
     robot = make_robot(trajectory.robot, tool=tool)
-    source = {"alignment": str(alignment_dir), "trajectory": str(trajectory_dir), "candidate": candidate}
-    return task_from_trajectory(trajectory, world, params, robot, make_scene(tool, world), seed, source)
+    source = {"alignment": str(alignment_dir), "trajectory": str(trajectory_dir), "candidate": str(k)}
+    return task_from_trajectory(trajectory, world, scene.params, robot, make_scene(tool, world), seed, source)
+
+
+def _same_params(first: SceneParams, second: SceneParams) -> bool:
+    """Same parameter names and values (to float rounding)."""
+    return first.keys() == second.keys() and all(np.allclose(first[name], second[name]) for name in first)

@@ -35,6 +35,26 @@ SUCCESS_FRACTION = 0.5
 #: Scene parameter values: a position parameter is a (3,) world point, a uniform one a float.
 SceneParams = Mapping[str, "np.ndarray | float"]
 
+#: Prefix of a scene parameter's key in the pipeline's ``.npz`` files (``param_<name>``).
+PARAM_PREFIX = "param_"
+
+
+def pack_scene_params(params: SceneParams) -> dict[str, np.ndarray]:
+    """``params`` as ``.npz`` arrays keyed ``param_<name>`` (floats as 0-d arrays); the one writer of
+    scene parameters in the pipeline's files (aligned demo, candidates, trajectory, task)."""
+    return {PARAM_PREFIX + name: np.asarray(value, dtype=float) for name, value in params.items()}
+
+
+def unpack_scene_params(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | float]:
+    """The ``param_<name>`` arrays of a loaded ``.npz`` as scene parameters (0-d arrays as floats,
+    stacked candidates keep their leading axis); the one reader of :func:`pack_scene_params`."""
+    return {
+        key.removeprefix(PARAM_PREFIX): float(value) if np.ndim(value) == 0 else np.asarray(value, dtype=float)
+        for key, value in arrays.items()
+        if key.startswith(PARAM_PREFIX)
+    }
+
+
 #: b (1/m^2) of the paper appendix's dense rewards ("Dense rewards (baseline v)",
 #: ../shared/reference/AUTHORS_SETUP.md): every term is exp(-0.5 b d^2) of a distance d (m), a
 #: length scale 1 / sqrt(b) of about 0.32 m.

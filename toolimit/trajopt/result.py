@@ -1,7 +1,9 @@
 """The result of trajectory optimisation: joint trajectory, base, tracking errors, limits, statistics.
 
 Saved as ``DIR/trajectory.npz`` (keys ``q`` (T+1, N) and ``v`` (T, N) for the robot's own joints,
-radians and rad/s; ``base`` (3,) x, y (m), yaw (rad); ``joint_names`` (N,); ``dt`` (s)) and
+radians and rad/s; ``base`` (3,) x, y (m), yaw (rad); ``joint_names`` (N,); ``dt`` (s); for a
+trajectory tracked in an alignment candidate's scene, ``scene_world``, ``scene_candidate`` and the
+scene parameters ``param_<name>``, :class:`TrackedScene`) and
 ``DIR/trajectory.json`` (robot, tool, errors, limit margins, velocity ratios, solver statistics,
 time scale). Both files are written to temporary names and renamed together.
 """
@@ -18,6 +20,7 @@ import numpy as np
 
 from toolimit.artifacts import atomic_path, json_text, load_npz
 from toolimit.errors import InputError
+from toolimit.scenes.base import SceneParams, pack_scene_params, unpack_scene_params
 from toolimit.trajopt.problem import TrackingWeights
 
 TRAJECTORY_NPZ = "trajectory.npz"
@@ -30,15 +33,61 @@ UPSIDE_DOWN_RAD = np.pi / 2
 _VELOCITY_CONSISTENCY_TOL = 1e-6
 
 
+class UpsideDownTracking(UserWarning):
+    """A trajectory tracks the tool's position with the tool turned upside down (a spade's blade
+    facing the ground): its robot replay earns little whatever its position error says."""
+
+    @classmethod
+    def of(cls, result: TrajectoryResult) -> UpsideDownTracking:
+        """The warning for ``result``, with its median rotation error."""
+        return cls(
+            f"the {result.tool} is tracked upside down by the {result.robot} (median rotation error "
+            f"{np.degrees(np.median(result.rotation_error)):.0f} deg): its position follows the targets, its "
+            "orientation does not (trajectory.json has the error at every step)"
+        )
+
+
+@dataclass(frozen=True)
+class TrackedScene:
+    """The scene a trajectory was tracked in: the alignment candidate whose scene stage iv learns in.
+
+    Attributes:
+        world: the scene's world (``"planar"`` or ``"3d"``).
+        candidate: the candidate's index in the alignment's ``candidates.npz``.
+        params: its scene parameters (position parameters (3,) m, world frame; uniform ones floats).
+    """
+
+    world: str
+    candidate: int
+    params: SceneParams
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The keys this record adds to ``trajectory.npz``."""
+        return {
+            "scene_world": np.str_(self.world),
+            "scene_candidate": np.int64(self.candidate),
+            **pack_scene_params(self.params),
+        }
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> TrackedScene | None:
+        """The record in a loaded ``trajectory.npz``; None for a trajectory tracked without a scene."""
+        if "scene_world" not in arrays:
+            return None
+        return cls(str(arrays["scene_world"]), int(arrays["scene_candidate"]), unpack_scene_params(arrays))
+
+
 @dataclass(frozen=True)
 class JointTrajectory:
-    """A trajectory.npz: q (T+1, N) rad, v (T, N) rad/s, base (3,) (m, m, rad), joint names, dt s."""
+    """A trajectory.npz: q (T+1, N) rad, v (T, N) rad/s, base (3,) (m, m, rad), joint names, dt s,
+    and the scene it was tracked in (None: tracked from poses alone)."""
 
     q: np.ndarray
     v: np.ndarray
     base: np.ndarray
     joint_names: tuple[str, ...]
     dt: float
+    scene: TrackedScene | None = None
 
 
 def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
@@ -71,7 +120,7 @@ def load_trajectory(directory: str | os.PathLike[str]) -> JointTrajectory:
     if mismatch.max() > _VELOCITY_CONSISTENCY_TOL:
         t, j = np.unravel_index(np.argmax(mismatch), mismatch.shape)
         raise InputError(f"{path}: v[{t}, {j}] differs from (q[{t + 1}] - q[{t}]) / dt by {mismatch[t, j]:.3g} rad/s")
-    return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt)
+    return JointTrajectory(q=q, v=v, base=base, joint_names=joint_names, dt=dt, scene=TrackedScene.from_arrays(data))
 
 
 @dataclass(frozen=True)
@@ -198,6 +247,9 @@ class TrajectoryResult:
         velocity_ratio: (T, N) |v| / velocity limit (above 1 = violation).
         statistics: how :func:`~toolimit.trajopt.track.track` found the trajectory; None for a
             trajectory made another way (by hand, in tests).
+        scene: the alignment candidate whose scene the trajectory was tracked and replayed in
+            (:func:`~toolimit.trajopt.selection.select_by_robot_execution`); None when tracked from
+            poses alone.
     """
 
     robot: str
@@ -213,6 +265,7 @@ class TrajectoryResult:
     limit_margin: np.ndarray
     velocity_ratio: np.ndarray
     statistics: TrackingStatistics | None = None
+    scene: TrackedScene | None = None
 
     @property
     def cost(self) -> float:
@@ -270,6 +323,7 @@ class TrajectoryResult:
             "max_velocity_ratio": float(self.velocity_ratio.max()),
             "velocity_violations": self.velocity_violations,
             "statistics": None if self.statistics is None else self.statistics.to_json(),
+            "scene": None if self.scene is None else {"world": self.scene.world, "candidate": self.scene.candidate},
         }
 
     def save(self, directory: str | os.PathLike[str]) -> Path:
@@ -292,6 +346,7 @@ class TrajectoryResult:
                     base=self.base,
                     joint_names=np.array(self.joint_names),
                     dt=np.float64(self.dt),
+                    **({} if self.scene is None else self.scene.arrays()),
                 )
             json_tmp.write_text(text)
         return directory
@@ -325,6 +380,7 @@ class TrajectoryResult:
             limit_margin=np.asarray(document["limit_margin"], dtype=float).reshape(q.shape),
             velocity_ratio=np.asarray(document["velocity_ratio"], dtype=float).reshape(v.shape),
             statistics=statistics,
+            scene=arrays.scene,
         )
 
 

@@ -23,6 +23,7 @@ sand, so ``toolimit run`` selects at real time in 3D (measurements at
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -32,11 +33,11 @@ from toolimit.artifacts import load_npz
 from toolimit.errors import BaseInsideFootprint, InputError
 from toolimit.progress import tqdm
 from toolimit.robots.model import RobotModel
-from toolimit.scenes.base import SceneParams
+from toolimit.scenes.base import SceneParams, unpack_scene_params
 from toolimit.scenes.registry import make_scene
 from toolimit.trajopt.execution import execute_in_scene
 from toolimit.trajopt.problem import PoseTargets
-from toolimit.trajopt.result import TrajectoryResult
+from toolimit.trajopt.result import TrackedScene, TrajectoryResult, UpsideDownTracking
 from toolimit.trajopt.track import TrackOptions, track
 from toolimit.workers import ordered_results
 
@@ -107,8 +108,13 @@ class RobotSelection:
 
 
 def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[AlignedCandidate]]:
-    """(tool, world, candidates) from an alignment's ``candidates.npz``."""
+    """(tool, world, candidates) from an alignment's ``candidates.npz`` (``path``, or the alignment
+    folder holding it): the one reader of that file."""
+    from toolimit.align.outputs import CANDIDATES_NPZ
+
     path = Path(path)
+    if path.is_dir():
+        path = path / CANDIDATES_NPZ
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file (run `toolimit align` first)")
     arrays = load_npz(
@@ -117,7 +123,7 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
     positions, quaternions = arrays["tip_position"], arrays["tip_quaternion_wxyz"]
     fps = float(arrays["fps"])
     rewards = arrays["alignment_reward"]
-    params = {k.removeprefix("param_"): value for k, value in arrays.items() if k.startswith("param_")}
+    params = unpack_scene_params(arrays)
     tool, world = str(arrays["tool"]), str(arrays["scene_world"])
     if positions.ndim != 3 or positions.shape[2] != 3 or quaternions.shape[:2] != positions.shape[:2]:
         raise InputError(
@@ -127,7 +133,7 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
     candidates = [
         AlignedCandidate(
             targets=PoseTargets.from_quaternions(positions[k], quaternions[k], fps),
-            params={name: value[k] if value[k].ndim else float(value[k]) for name, value in params.items()},
+            params={name: value[k] if np.ndim(value[k]) else float(value[k]) for name, value in params.items()},
             alignment_reward=float(rewards[k]),
         )
         for k in range(len(positions))
@@ -154,7 +160,9 @@ def select_by_robot_execution(
     how one is kept); None tracks at ``options.time_scale`` only. Candidate k's tracking and
     replays draw from ``default_rng([seed, k])``, its scales in ascending order; its base guesses
     avoid the scene's element footprints. ``workers`` processes track candidates side by side
-    (:mod:`toolimit.workers`); the selection does not depend on their number.
+    (:mod:`toolimit.workers`); the selection does not depend on their number. Each kept trajectory
+    records its candidate (``TrajectoryResult.scene``); an upside-down tracking is warned
+    (:class:`~toolimit.trajopt.result.UpsideDownTracking`) for the selected candidate only.
     """
     if not candidates:
         raise InputError("no alignment candidate to select from")
@@ -181,6 +189,9 @@ def select_by_robot_execution(
     ranked = [k for k in range(len(candidates)) if robot_rewards[k] > 0]
     costs = [float("nan") if trajectory is None else trajectory.cost for trajectory in trajectories]
     best = min(ranked, key=lambda k: (-robot_rewards[k], costs[k]), default=None)
+    chosen = None if best is None else trajectories[best]
+    if chosen is not None and chosen.upside_down:
+        warnings.warn(UpsideDownTracking.of(chosen), stacklevel=2)
     return RobotSelection(best, trajectories, robot_rewards, refusals, by_scale)
 
 
@@ -203,9 +214,13 @@ def _execute_candidate(
     kept: tuple[float, TrajectoryResult] | None = None
     refusal: str | None = None
     by_scale: dict[float, float] = {}
+    scene_record = TrackedScene(world, k, candidate.params)
     for scale in scales:
         try:  # refused where every base the solver finds, or the one it keeps, stands in an element
-            trajectory = track(robot, candidate.targets, replace(candidate_options, time_scale=float(scale)), rng=rng)
+            with warnings.catch_warnings():  # only the selected candidate's is worth a warning
+                warnings.simplefilter("ignore", UpsideDownTracking)
+                tracked = track(robot, candidate.targets, replace(candidate_options, time_scale=float(scale)), rng=rng)
+            trajectory = replace(tracked, scene=scene_record)
             reward = float(np.mean(execute_in_scene(robot, trajectory, scene, candidate.params, rng, replays)))
         except BaseInsideFootprint as error:
             by_scale[float(scale)] = float("nan")

@@ -24,19 +24,20 @@ the targets turned by pi about the tool axis; the better is kept.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from toolimit.errors import BaseInsideFootprint, InputError
+from toolimit.errors import BaseInsideFootprint, InvalidSetting
 from toolimit.progress import tqdm
 from toolimit.robots import RobotModel
 from toolimit.tools import wrap_angle
 from toolimit.trajopt.initial_guess import ik_rollout
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
-from toolimit.trajopt.result import TrackingStatistics, TrajectoryResult
+from toolimit.trajopt.result import TrackingStatistics, TrajectoryResult, UpsideDownTracking
 from toolimit.trajopt.sqp import SqpOptions, SqpOutcome, solve_sqp
 
 #: Joint-trajectory initialisations of a run (see the module docstring).
@@ -48,7 +49,7 @@ class TrackOptions:
     """Settings of :func:`track`.
 
     Attributes:
-        weights: cost weights (position 1, rotation 0.5, velocity 0.01 by default).
+        weights: cost weights (:class:`~toolimit.trajopt.problem.TrackingWeights`).
         sqp: SQP and OSQP settings.
         starts: number of base initialisations (8 = the benchmark's ring).
         ring_starts: how many of them lie on the deterministic ring (the rest are random).
@@ -77,16 +78,16 @@ class TrackOptions:
     progress: bool = False
 
     def __post_init__(self) -> None:
-        if self.starts < 1:
-            raise InputError(f"starts must be >= 1, got {self.starts}")
+        if not (isinstance(self.starts, (int, np.integer)) and self.starts >= 1):
+            raise InvalidSetting("starts", f"must be an integer >= 1, got {self.starts}")
         if not (np.isfinite(self.time_scale) and self.time_scale > 0):
-            raise InputError(f"time_scale must be positive, got {self.time_scale}")
+            raise InvalidSetting("time_scale", f"must be positive, got {self.time_scale}")
         if not self.start_radius > 0:
-            raise InputError(f"start_radius must be positive, got {self.start_radius}")
+            raise InvalidSetting("start_radius", f"must be positive, got {self.start_radius}")
         unknown = set(self.initialisations) - set(INITIALISATIONS)
         if not self.initialisations or unknown:
-            raise InputError(
-                f"initialisations must be a non-empty subset of {INITIALISATIONS}, got {self.initialisations}"
+            raise InvalidSetting(
+                "initialisations", f"must be a non-empty subset of {INITIALISATIONS}, got {self.initialisations}"
             )
 
 
@@ -153,7 +154,9 @@ def track(
 
     ``guesses`` (S, 3) replaces the generated base initialisations. The result's
     :class:`~toolimit.trajopt.result.TrackingStatistics` hold the cost J and its terms, the best
-    run's iterations, the cost of every run, merged and rejected counts, wall time.
+    run's iterations, the cost of every run, merged and rejected counts, wall time. A result that
+    tracks the tool upside down (``TrajectoryResult.upside_down``) warns
+    :class:`~toolimit.trajopt.result.UpsideDownTracking`.
     """
     started = time.perf_counter()
     dt = options.time_scale / targets.fps
@@ -208,7 +211,10 @@ def track(
         best_start_wall_time_s=best.wall_time_s,
         weights=options.weights,
     )
-    return evaluate_trajectory(robot, problem.targets, best.base, best.q, dt, options.time_scale, statistics)
+    result = evaluate_trajectory(robot, problem.targets, best.base, best.q, dt, options.time_scale, statistics)
+    if result.upside_down:
+        warnings.warn(UpsideDownTracking.of(result), stacklevel=2)
+    return result
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,259 @@
+"""The paper's results figure, every cell measured and saved, resumable: :func:`reproduce`.
+
+For each experiment of the preset (tool, world, robot, demonstration), :func:`~toolimit.pipeline.run_pipeline`
+makes the alignment, the robot's trajectory and the cloned-then-PPO policy (OUT/<experiment>/method);
+the baselines learn from the same task with the same PPO budget, environments and seed, from a
+random policy with a learned standard deviation: on the sparse goal reward
+(OUT/<experiment>/sparse_ppo) and on the goal reward plus the appendix's dense shaping
+(OUT/<experiment>/dense_ppo). LfD, the kinesthetic-demonstration baseline (OUT/<experiment>/lfd),
+tracks the scene's scripted motion with the pipeline's stage iii settings in the same scene, slower
+where the arm cannot follow it at the pipeline's pace (:mod:`toolimit.learn.kinesthetic`), and
+learns from it with exactly the method's learning settings (cloning, then PPO). Each method is then
+measured on the same footing (:mod:`toolimit.experiments.measure`) and saved as
+OUT/cells/<cell>.json the moment it is known; run again, every saved cell is skipped and each stage
+resumes from its checkpoint. OUT/results.json, OUT/results.md and OUT/results_<tool>.svg are
+rewritten after every experiment.
+
+Presets: ``quick`` (the planar spade, tiny budgets: a minute, for CI and a first look), ``planar``
+(the same experiment with the planar world's default settings: the paper's pattern in a quarter of
+an hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstrations and the
+authors' real recording, the hammer and the scythe on one demonstration each, every method; the
+UR5 and Talos with the spade on the real recording, the method's stages only; the 3D world's
+default settings). ``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
+reproduce`` process whose output goes to OUT/logs/<experiment>.log (the results do not depend on
+it: every experiment is seeded on its own).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from toolimit.artifacts import save_json
+from toolimit.errors import (
+    BaseInsideFootprint,
+    InputError,
+    NoKinestheticDemonstration,
+    NoScriptedMotion,
+    SolverFailure,
+    StageFoundNothing,
+)
+from toolimit.experiments.cells import METHODS, PIPELINE_METHODS, CellResult, Experiment
+from toolimit.experiments.measure import measure_policy, measure_tool_only, measure_trajopt
+from toolimit.experiments.report import write_results
+from toolimit.interrupts import SIGNALS, Interrupted
+from toolimit.learn.kinesthetic import kinesthetic_task
+from toolimit.learn.task import TASK_NPZ, LearningTask
+from toolimit.learn.training import learn_policy
+from toolimit.pipeline.run import run_pipeline
+from toolimit.pipeline.settings import PipelineSettings
+
+#: Where ``full`` finds the authors' real spade recording: ``../shared`` beside the checkout.
+REAL_SPADE_RECORDING = Path("../shared/data/video_demos/spade_video1_aligned.npz")
+SHIPPED_DEMOS = Path("data/demos")
+#: The baselines' rewards (``LearningConfig.reward``), both learnt from a random policy.
+BASELINE_REWARDS = {"sparse_ppo": "sparse", "dense_ppo": "dense"}
+PRESETS = ("quick", "planar", "full")
+
+#: ``report(experiment name, line)``: a line for a person about one experiment.
+Report = Callable[[str, str], None]
+
+
+@dataclass(frozen=True)
+class Preset:
+    """What :func:`reproduce` runs: the experiments and whether with the quick budgets."""
+
+    name: str
+    experiments: tuple[Experiment, ...]
+    quick: bool = False
+
+    def settings(self, world: str, seed: int) -> PipelineSettings:
+        """Every experiment's pipeline settings in ``world`` (the evaluation's episodes are the cells')."""
+        return PipelineSettings.for_world(world, quick=self.quick).with_seed(seed)
+
+
+def preset(name: str) -> Preset:
+    """The preset ``name`` (module docstring); demonstrations relative to the working folder."""
+    planar_spade = (Experiment("spade", "planar", "planar3", SHIPPED_DEMOS / "spade_03.npz"),)
+    if name == "quick":
+        return Preset(name, planar_spade, quick=True)
+    if name == "planar":
+        return Preset(name, planar_spade)
+    if name != "full":
+        raise InputError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
+    spades = [SHIPPED_DEMOS / f"spade_{k:02d}.npz" for k in range(5)] + [REAL_SPADE_RECORDING]
+    experiments = [Experiment("spade", "3d", "panda", demo) for demo in spades]
+    experiments += [Experiment(tool, "3d", "panda", SHIPPED_DEMOS / f"{tool}_00.npz") for tool in ("hammer", "scythe")]
+    experiments += [
+        Experiment("spade", "3d", robot, REAL_SPADE_RECORDING, methods=PIPELINE_METHODS) for robot in ("ur5", "talos")
+    ]
+    return Preset(name, tuple(experiments))
+
+
+def reproduce(
+    chosen: Preset,
+    out: str | Path,
+    seed: int = 0,
+    methods: Sequence[str] = METHODS,
+    jobs: int = 1,
+    progress: bool = True,
+    report: Report | None = None,
+) -> int:
+    """Measure every missing cell of ``chosen``'s experiments for ``methods`` into ``out`` and write
+    the results (module docstring). Returns 0, or 1 when an experiment's pipeline found nothing or
+    its robot cannot track LfD's scripted motion so that it earns (those cells are missing; the
+    report says why). Raises :class:`~toolimit.interrupts.Interrupted` when a step (or a child) was
+    interrupted, after every finished cell was saved."""
+    out = Path(out)
+    say = report or (lambda name, line: None)
+
+    def results() -> list[Path]:
+        cells = [CellResult.load(path) for path in sorted((out / "cells").glob("*.json"))]
+        return write_results(out, cells, {"name": chosen.name, "quick": chosen.quick, "seed": seed})
+
+    code = 0
+    if jobs > 1 and len(chosen.experiments) > 1:
+        code = _run_children(chosen, out, seed, methods, jobs, say, results)
+    else:
+        for experiment in chosen.experiments:
+            code = max(code, reproduce_experiment(experiment, chosen, out, seed, methods, progress, say))
+            results()
+    say("results", f"wrote {', '.join(str(path) for path in results())}")
+    return code
+
+
+def reproduce_experiment(
+    experiment: Experiment,
+    chosen: Preset,
+    out: Path,
+    seed: int,
+    methods: Sequence[str],
+    progress: bool,
+    say: Report,
+) -> int:
+    """Run the pipeline and the baselines of one experiment and save its missing cells; 0, or 1
+    when the pipeline found nothing or LfD has no kinesthetic demonstration."""
+    cells_dir, folder = out / "cells", out / experiment.name
+    missing = [
+        m for m in methods if m in experiment.methods and not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()
+    ]
+    if not missing:
+        say(experiment.name, "done earlier")
+        return 0
+    settings = chosen.settings(experiment.world, seed)
+    method_dir = folder / "method"
+    started = time.perf_counter()
+    try:
+        run_pipeline(
+            experiment.demo,
+            method_dir,
+            experiment.tool,
+            experiment.robot,
+            experiment.world,
+            settings,
+            progress=progress,
+            on_stage=lambda stage, line: say(experiment.name, f"[{stage}] {line}"),
+        )
+    except StageFoundNothing as nothing:
+        say(experiment.name, f"the pipeline found nothing, no cells for this experiment: {nothing}")
+        return 1
+    pipeline_time = time.perf_counter() - started
+    task = LearningTask.load(method_dir / "learning" / TASK_NPZ)
+    episodes, evaluation_seed = settings.evaluation.episodes, settings.evaluation.seed
+    code = 0
+    for method in missing:
+        if method == "tool_only":
+            cell = measure_tool_only(experiment, task, episodes, evaluation_seed)
+        elif method == "trajopt":
+            cell = measure_trajopt(experiment, task, episodes, evaluation_seed)
+        elif method == "final":
+            cell = measure_policy(experiment, method, method_dir / "learning", episodes, evaluation_seed)
+            cell = dataclasses.replace(cell, wall_time_s=_pipeline_wall_time(method_dir, pipeline_time))
+        else:
+            learning = folder / method / "learning" if method == "lfd" else folder / method
+            if method == "lfd":
+                try:
+                    learned_task = kinesthetic_task(
+                        task,
+                        folder / method,
+                        settings.trajopt.track_options(),
+                        settings.trajopt.time_scales,
+                        seed=settings.learning.seed,
+                    )
+                except (BaseInsideFootprint, NoKinestheticDemonstration, SolverFailure, NoScriptedMotion) as refusal:
+                    say(experiment.name, f"lfd: no kinesthetic demonstration, no cell: {refusal}")
+                    code = 1
+                    continue
+                config = settings.learning
+            else:
+                learned_task = task
+                config = dataclasses.replace(settings.learning, clone=False, reward=BASELINE_REWARDS[method])
+            say(experiment.name, f"{method}: learning in {learning}")
+            learn_policy(learned_task, learning, config, progress=progress)
+            cell = measure_policy(experiment, method, learning, episodes, evaluation_seed)
+        save_json(cells_dir / f"{experiment.cell_key(method)}.json", cell.record())
+        say(experiment.name, f"{method}: goal reward {cell.goal_reward:.1f}, success {cell.success_rate:.2f}")
+    return code
+
+
+def _pipeline_wall_time(method_dir: Path, fallback: float) -> float:
+    """The pipeline's wall time over every call (its evaluation record), else ``fallback`` seconds."""
+    import json
+
+    from toolimit.pipeline.stages import EVALUATION_JSON
+
+    path = method_dir / EVALUATION_JSON
+    return float(json.loads(path.read_text())["wall_time_s"]) if path.is_file() else fallback
+
+
+def _run_children(
+    chosen: Preset,
+    out: Path,
+    seed: int,
+    methods: Sequence[str],
+    jobs: int,
+    say: Report,
+    results: Callable[[], object],
+) -> int:
+    """Each experiment in a child ``toolimit reproduce``, ``jobs`` at a time, its output in
+    OUT/logs/<experiment>.log; ``results()`` after each. The children share the terminal's process
+    group, so a Ctrl-C reaches them too: each saves its progress and stops; a signal sent to this
+    process alone is passed on. The exit code: the worst of the children's (an interrupted child
+    interrupts the whole reproduction)."""
+    logs = out / "logs"
+    logs.mkdir(parents=True, exist_ok=True)
+    pending = list(chosen.experiments)
+    running: dict[subprocess.Popen[bytes], Experiment] = {}
+    from_preset = set(chosen.experiments) <= set(preset(chosen.name).experiments)
+    code = 0
+    try:
+        while pending or running:
+            while pending and len(running) < jobs:
+                experiment = pending.pop(0)
+                selector = ["--experiment", experiment.name] if from_preset else ["--demo", str(experiment.demo)]
+                command = [sys.executable, "-m", "toolimit", "reproduce", "--preset", chosen.name, *selector]
+                command += ["--methods", ",".join(methods), "--out", str(out), "--seed", str(seed), "--quiet"]
+                log = logs / f"{experiment.name}.log"
+                with open(log, "w") as output:
+                    child = subprocess.Popen(command, stdout=output, stderr=subprocess.STDOUT)
+                running[child] = experiment
+                say(experiment.name, f"started (log: {log})")
+            time.sleep(0.5)
+            for child in [c for c in running if c.poll() is not None]:
+                experiment = running.pop(child)
+                say(experiment.name, f"ended (exit {child.returncode})")
+                if child.returncode - 128 in SIGNALS:
+                    raise Interrupted(child.returncode - 128)
+                code = max(code, child.returncode)
+                results()
+    finally:
+        for child in running:  # interrupted: pass the signal on, then let each child save and stop
+            child.send_signal(SIGNALS[0])
+        for child in running:
+            child.wait()
+    return code

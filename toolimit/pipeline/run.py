@@ -1,0 +1,171 @@
+"""The whole pipeline, demonstration to trained policy, resumable stage by stage: :func:`run_pipeline`.
+
+demonstration -> alignment (OUT/alignment) -> trajectory with selection by robot execution
+(OUT/trajectory) -> learning: cloning and PPO (OUT/learning) -> evaluation (OUT/evaluation.json)
+-> the policy's deterministic rollout (OUT/policy_rollout) and its export (OUT/export; robots
+with published limits). Called again on the same folder, it skips every finished stage and resumes
+the first unfinished one from its checkpoint (the alignment and the learning save theirs).
+OUT/run.json keeps each stage's wall time; OUT/evaluation.json has ``success_rate``,
+``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included) and
+``wall_time_s`` (alignment to evaluation, over every call).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from toolimit.align.outputs import ALIGNMENT_JSON, alignment_finished
+from toolimit.artifacts import save_json
+from toolimit.demos import ToolDemo
+from toolimit.errors import InputError
+from toolimit.learn.task import TASK_NPZ, LearningTask
+from toolimit.pipeline.settings import PipelineSettings
+from toolimit.pipeline.stages import (
+    EVALUATION_JSON,
+    align_stage,
+    describe_alignment,
+    describe_trajectory,
+    evaluate_stage,
+    export_stage,
+    learn_stage,
+    learning_finished,
+    learning_record,
+    trajopt_stage,
+)
+from toolimit.trajopt.result import TRAJECTORY_JSON, TRAJECTORY_NPZ
+
+RUN_JSON = "run.json"
+#: The stages in order: their folders under OUT and their names in ``run.json``.
+STAGES = ("alignment", "trajectory", "learning")
+
+#: ``on_stage(stage, line)``: a line for a person about ``stage`` (``print`` them, log them).
+StageReport = Callable[[str, str], None]
+
+
+@dataclass(frozen=True)
+class PipelineResult:
+    """What :func:`run_pipeline` made.
+
+    Attributes:
+        folder: OUT, one sub-folder per stage.
+        evaluation: the record of OUT/evaluation.json (see the module docstring).
+        export: OUT/export, or None for a robot without published limits.
+    """
+
+    folder: Path
+    evaluation: dict[str, Any]
+    export: Path | None
+
+    @property
+    def success_rate(self) -> float:
+        """The policy's deterministic success rate (the paper's criterion)."""
+        return float(self.evaluation["success_rate"])
+
+
+def run_pipeline(
+    demo: ToolDemo | str | Path,
+    out: str | Path,
+    tool: str,
+    robot: str,
+    world: str = "3d",
+    settings: PipelineSettings | None = None,
+    progress: bool = True,
+    on_stage: StageReport | None = None,
+) -> PipelineResult:
+    """Run (or resume) every stage for ``tool`` and ``robot`` in ``world`` from ``demo`` (a
+    ToolDemo or a demonstration file) into ``out``; see the module docstring.
+
+    ``settings`` default to :meth:`PipelineSettings.for_world`. ``on_stage`` receives each
+    stage's lines for a person. Raises InputError when a finished stage in ``out`` was made for
+    another tool, world or robot, StageFoundNothing when the alignment or the robot's selection
+    finds nothing, and KeyboardInterrupt (:mod:`toolimit.interrupts`) after the interrupted stage
+    saved its checkpoint.
+    """
+    out = Path(out)
+    settings = settings if settings is not None else PipelineSettings.for_world(world)
+    report = on_stage or (lambda stage, line: None)
+    alignment, trajectory, learning = (out / stage for stage in STAGES)
+    times = _stage_times(out)
+
+    def timed(stage: str, work: Callable[[], Any]) -> Any:
+        started = time.perf_counter()
+        try:
+            return work()
+        finally:
+            times[stage] = times.get(stage, 0.0) + time.perf_counter() - started
+            save_json(out / RUN_JSON, {"stage_times_s": times})
+
+    finished = {
+        "alignment": alignment_finished(alignment),
+        "trajectory": (trajectory / TRAJECTORY_NPZ).is_file(),
+        "learning": learning_finished(learning),
+    }
+    for stage in STAGES:
+        if finished[stage]:
+            _check_same_run(out / stage, {"tool": tool, "world": world, "robot": robot})
+            report(stage, f"done earlier: {out / stage}")
+            continue
+        report(stage, "started")
+        if stage == "alignment":
+            result = timed(stage, lambda: align_stage(demo, tool, world, alignment, settings.align, progress))
+            lines = describe_alignment(result)
+        elif stage == "trajectory":
+            made = timed(stage, lambda: trajopt_stage(alignment, robot, trajectory, settings.trajopt, progress, tool))
+            lines = describe_trajectory(made)
+        else:
+            timed(stage, lambda: learn_stage(alignment, trajectory, learning, settings.learning, progress))
+            record = learning_record(learning)
+            lines = [
+                f"{record['env_steps']} env steps ({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s"
+            ]
+        for line in lines:
+            report(stage, line)
+    evaluation = timed("evaluation", lambda: evaluate_stage(learning, settings.evaluation))
+    learned = learning_record(learning)
+    record = evaluation.record | {
+        "env_steps": learned["env_steps"],
+        "wall_time_s": sum(times.values()),
+        "stage_times_s": times,
+        "simulation_time_s": learned["simulation_time_s"],
+        "learning_time_s": learned["learning_time_s"],
+    }
+    save_json(out / EVALUATION_JSON, record)
+    export = export_stage(evaluation, out, settings.export)
+    report(
+        "export",
+        f"retimed within the {robot}'s limits: {export}"
+        if export is not None
+        else f"skipped: the {robot} has no published acceleration and jerk limits (its rollout: {out / 'policy_rollout'})",
+    )
+    return PipelineResult(out, record, export)
+
+
+def _check_same_run(folder: Path, expected: dict[str, str]) -> None:
+    """InputError if a finished stage's folder was made for another tool, world or robot."""
+    found: dict[str, str] = {}
+    if (folder / ALIGNMENT_JSON).is_file():
+        record = json.loads((folder / ALIGNMENT_JSON).read_text())
+        found = {"tool": record["tool"], "world": record["world"]}
+    elif (folder / TRAJECTORY_JSON).is_file():
+        record = json.loads((folder / TRAJECTORY_JSON).read_text())
+        found = {"tool": record["tool"], "robot": record["robot"]}
+    elif (folder / TASK_NPZ).is_file():
+        task = LearningTask.load(folder / TASK_NPZ)
+        found = {"tool": task.tool, "world": task.world, "robot": task.robot}
+    for key, value in found.items():
+        if value != expected[key]:
+            raise InputError(
+                f"{folder} holds a finished stage for {key} {value!r}, not {expected[key]!r}: "
+                "choose another output folder or remove that one"
+            )
+
+
+def _stage_times(out: Path) -> dict[str, float]:
+    """Each stage's wall time so far (s), from OUT/run.json."""
+    path = out / RUN_JSON
+    return json.loads(path.read_text())["stage_times_s"] if path.is_file() else {}

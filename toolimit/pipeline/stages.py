@@ -1,0 +1,300 @@
+"""The pipeline's stages as functions: each takes the previous stage's output and its settings,
+writes its folder and returns a typed result.
+
+- :func:`align_stage` (ii): demonstration -> ``alignment.json``, ``aligned_demo.npz``, ``candidates.npz``;
+- :func:`trajopt_stage` (iii): alignment folder -> ``trajectory.npz``/``.json`` (recording the
+  candidate it was tracked in) and ``selection.json``; :func:`trajopt_from_poses` for poses alone;
+- :func:`learn_stage` (iv): alignment and trajectory folders -> ``learning/`` (cloning, PPO);
+- :func:`evaluate_stage`: a policy folder -> the evaluation record;
+- :func:`export_stage`: the policy's deterministic rollout -> ``policy_rollout/`` and ``export/``.
+
+A stage that finds nothing to hand on raises :class:`~toolimit.errors.StageFoundNothing` after
+writing its record; each one's lines for a person to read come from the ``describe_*`` functions.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from toolimit.align.outputs import ALIGNMENT_JSON, CHECKPOINT_JSON, write_alignment
+from toolimit.align.search import AlignmentResult, align
+from toolimit.artifacts import save_json
+from toolimit.demos import ToolDemo, load_demo
+from toolimit.errors import InputError, StageFoundNothing
+from toolimit.learn.evaluate import Evaluation, evaluate, save_rollout_trajectory
+from toolimit.learn.task import LearningTask, task_from_pipeline
+from toolimit.learn.training import LEARNING_JSON, LearningConfig, LearningOutcome, learn_policy, load_policy
+from toolimit.pipeline.settings import AlignSettings, EvaluationSettings, ExportSettings, TrajoptSettings
+from toolimit.robots import make_robot
+from toolimit.trajopt.problem import PoseTargets
+from toolimit.trajopt.result import TrackedScene, TrajectoryResult
+from toolimit.trajopt.selection import (
+    SELECTION_JSON,
+    AlignedCandidate,
+    RobotSelection,
+    load_candidates,
+    select_by_robot_execution,
+)
+from toolimit.trajopt.time_scale import choose_time_scale
+from toolimit.trajopt.track import track
+from toolimit.workers import worker_count
+
+#: The evaluation record beside a policy (``toolimit evaluate``) and in a pipeline's folder.
+EVALUATION_JSON = "evaluation.json"
+
+
+def align_stage(
+    demo: ToolDemo | str | Path,
+    tool: str,
+    world: str,
+    out: str | Path,
+    settings: AlignSettings = AlignSettings(),
+    progress: bool = True,
+) -> AlignmentResult:
+    """Stage ii: align ``tool``'s scene in ``world`` to ``demo`` (a ToolDemo or a demonstration
+    file) and write ``out``. An interrupted search saves ``out/alignment_checkpoint.json`` and the
+    same call resumes it (:class:`~toolimit.align.search.SearchInterrupted`). InputError for a
+    demonstration of another tool; StageFoundNothing when no sample earned a reward (the record is
+    written, with no candidate)."""
+    out = Path(out)
+    source = str(demo) if isinstance(demo, (str, Path)) else demo.source or "(in memory)"
+    if isinstance(demo, (str, Path)):
+        demo = load_demo(demo, tool=tool)  # also names the tool of files that do not store it
+    workers = worker_count(settings.workers)
+    result = align(
+        demo,
+        tool,
+        world,
+        settings.search,
+        seed=settings.seed,
+        workers=workers,
+        progress=progress,
+        checkpoint=out / CHECKPOINT_JSON,
+        clean=settings.clean,
+    )
+    write_alignment(result, out, source, cleaned=settings.clean, workers=workers)
+    if result.best is None:
+        raise StageFoundNothing(
+            f"no candidate: no sample earned a goal reward within {settings.search.samples} samples "
+            f"(record: {out / ALIGNMENT_JSON}); try more samples or another seed"
+        )
+    return result
+
+
+def describe_alignment(result: AlignmentResult) -> list[str]:
+    """Lines for a person: cleaning, samples, candidates, the best one."""
+    lines = []
+    if result.cleaning is not None:
+        lines.append(
+            f"cleaned demo: {len(result.cleaning.replaced_frames)} frames replaced "
+            f"({len(result.cleaning.head_replaced_frames)} of them with the head's position)"
+        )
+    rejected = result.samples_rejected / max(result.samples_tried, 1)
+    lines.append(
+        f"{len(result.candidates)} candidate(s) in {result.samples_tried} samples ({rejected:.0%} rejected), "
+        f"{result.wall_time_s:.1f} s"
+    )
+    if result.best is not None:
+        best = result.best
+        lines.append(
+            f"best: sample {best.index}, mean goal reward {best.reward:.3f} "
+            f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m)"
+        )
+    return lines
+
+
+@dataclass(frozen=True)
+class TrajectoryStage:
+    """What :func:`trajopt_stage` made.
+
+    Attributes:
+        trajectory: the kept trajectory; ``trajectory.scene`` names its candidate.
+        candidates: the alignment's candidates.
+        selection: the robot's selection among them (None when ``select_by_robot`` is off).
+    """
+
+    trajectory: TrajectoryResult
+    candidates: list[AlignedCandidate]
+    selection: RobotSelection | None
+
+
+def trajopt_stage(
+    alignment: str | Path,
+    robot: str,
+    out: str | Path,
+    settings: TrajoptSettings = TrajoptSettings(),
+    progress: bool = True,
+    tool: str | None = None,
+) -> TrajectoryStage:
+    """Stage iii from an alignment folder: with ``settings.select_by_robot``, every candidate is
+    tracked by ``robot`` and replayed in its scene, and the one whose replay earns most is kept
+    (``out/selection.json`` lists them all); otherwise the best tool-only candidate is tracked.
+    Writes ``out/trajectory.npz``/``.json``, which record the candidate. InputError when ``tool``
+    is given and the alignment is another tool's; StageFoundNothing when no robot replay earns a
+    reward."""
+    out = Path(out)
+    aligned_tool, world, candidates = load_candidates(alignment)
+    if tool is not None and tool != aligned_tool:
+        raise InputError(f"the alignment in {alignment} is for the {aligned_tool}, not the {tool}")
+    robot_model = make_robot(robot, tool=aligned_tool)
+    options = settings.track_options(progress=progress and not settings.select_by_robot)
+    selection = None
+    if settings.select_by_robot:
+        selection = select_by_robot_execution(
+            robot_model,
+            candidates,
+            aligned_tool,
+            world,
+            options,
+            seed=settings.seed,
+            progress=progress,
+            time_scales=settings.time_scales,
+            workers=worker_count(settings.workers),
+        )
+        save_json(out / SELECTION_JSON, selection.record(candidates))
+        if selection.best is None:
+            raise StageFoundNothing(
+                f"no candidate's robot replay earned a goal reward (record: {out / SELECTION_JSON})"
+            )
+        trajectory = selection.trajectories[selection.best]
+        assert trajectory is not None  # the best candidate was tracked
+    else:
+        best = max(range(len(candidates)), key=lambda k: (candidates[k].alignment_reward, -k))
+        tracked = _track(robot_model, candidates[best].targets, settings, progress)
+        trajectory = replace(tracked, scene=TrackedScene(world, best, candidates[best].params))
+    trajectory.save(out)
+    return TrajectoryStage(trajectory, candidates, selection)
+
+
+def trajopt_from_poses(
+    targets: PoseTargets,
+    robot: str,
+    tool: str,
+    out: str | Path,
+    settings: TrajoptSettings = TrajoptSettings(),
+    progress: bool = True,
+) -> TrajectoryResult:
+    """Stage iii from tool poses alone (no scene: the trajectory records none); writes ``out``."""
+    trajectory = _track(make_robot(robot, tool=tool), targets, settings, progress)
+    trajectory.save(out)
+    return trajectory
+
+
+def _track(robot: Any, targets: PoseTargets, settings: TrajoptSettings, progress: bool) -> TrajectoryResult:
+    """``targets`` tracked at the first time scale, or the first of several that tracks within 1 cm."""
+    rng = np.random.default_rng(settings.seed)
+    options = settings.track_options(progress)
+    if len(settings.time_scales) > 1:
+        return choose_time_scale(robot, targets, options, grid=settings.time_scales, rng=rng)
+    return track(robot, targets, options, rng=rng)
+
+
+def describe_trajectory(stage: TrajectoryStage) -> list[str]:
+    """Lines for a person: each candidate's robot replay (with a selection) and the kept trajectory."""
+    lines = []
+    selection = stage.selection
+    if selection is not None:
+        for k, (trajectory, reward) in enumerate(zip(selection.trajectories, selection.robot_rewards)):
+            if trajectory is None:
+                lines.append(f"candidate {k}: refused ({selection.refusals[k]})")
+            else:
+                lines.append(f"candidate {k}: robot replay reward {reward:.1f}; {trajectory.describe()}")
+    scene = stage.trajectory.scene
+    assert scene is not None  # trajopt_stage records it
+    reward = "" if selection is None else f", robot reward {selection.robot_rewards[scene.candidate]:.1f}"
+    lines.append(
+        f"kept candidate {scene.candidate} (alignment reward "
+        f"{stage.candidates[scene.candidate].alignment_reward:.1f}{reward}): {stage.trajectory.describe()}"
+    )
+    return lines
+
+
+def learn_stage(
+    alignment: str | Path,
+    trajectory: str | Path,
+    out: str | Path,
+    config: LearningConfig = LearningConfig(),
+    progress: bool = True,
+) -> LearningOutcome:
+    """Stage iv: the learning task of the trajectory in the scene it was tracked in
+    (:func:`~toolimit.learn.task.task_from_pipeline`), learnt by cloning then PPO into ``out``
+    (resumed from its checkpoint)."""
+    task = task_from_pipeline(alignment, trajectory, seed=config.seed)
+    return learn_policy(task, out, config, progress=progress)
+
+
+def learning_finished(folder: str | Path) -> bool:
+    """A learning folder whose run ended (its final policy and record written)."""
+    from toolimit.learn.ppo import POLICY_ZIP
+
+    folder = Path(folder)
+    return (folder / POLICY_ZIP).is_file() and (folder / LEARNING_JSON).is_file()
+
+
+@dataclass(frozen=True)
+class PolicyEvaluation:
+    """What :func:`evaluate_stage` measured.
+
+    Attributes:
+        record: the JSON record (``evaluation.json``): tool, world, robot, seed, the deterministic
+            rollouts' ``success_rate``, ``goal_reward_mean``, ``goal_reward``, ``episodes``, and the
+            stochastic ones under ``stochastic``.
+        deterministic: the deterministic rollouts (their joints feed the export).
+        task: the policy's task.
+    """
+
+    record: dict[str, Any]
+    deterministic: Evaluation
+    task: LearningTask
+
+
+def evaluate_stage(policy: str | Path, settings: EvaluationSettings = EvaluationSettings()) -> PolicyEvaluation:
+    """Deterministic and stochastic rollouts of the policy in the folder ``policy``
+    (``toolimit learn``'s), ``settings.episodes`` each from seeded resets."""
+    model, task = load_policy(policy)
+    deterministic = evaluate(model, task, settings.episodes, deterministic=True, seed=settings.seed)
+    stochastic = evaluate(model, task, settings.episodes, deterministic=False, seed=settings.seed)
+    record = {
+        "tool": task.tool,
+        "world": task.world,
+        "robot": task.robot,
+        "seed": settings.seed,
+        **deterministic.record(),
+        "stochastic": stochastic.record(),
+    }
+    return PolicyEvaluation(record, deterministic, task)
+
+
+def export_stage(
+    evaluation: PolicyEvaluation, out: str | Path, settings: ExportSettings = ExportSettings()
+) -> Path | None:
+    """The policy's first deterministic episode, joints (H+1, N) rad, saved in stage iii's format to
+    ``out/policy_rollout`` and, for a robot with published limits, retimed and written to
+    ``out/export`` (:func:`~toolimit.deploy.export_trajectory`); the export folder, or None for a
+    robot without published limits."""
+    from toolimit.deploy import SUPPORTED_ROBOTS, export_trajectory, load_trajectory
+
+    out = Path(out)
+    task = evaluation.task
+    rollout = save_rollout_trajectory(evaluation.deterministic.joint_positions[0], task, out / "policy_rollout")
+    if task.robot not in SUPPORTED_ROBOTS:
+        return None
+    export_trajectory(
+        load_trajectory(rollout),
+        task.robot,
+        out / "export",
+        rate=settings.rate,
+        subdivisions=settings.subdivisions,
+        source=str(rollout),
+    )
+    return out / "export"
+
+
+def learning_record(folder: str | Path) -> dict[str, Any]:
+    """The ``learning.json`` of a finished learning folder."""
+    return json.loads((Path(folder) / LEARNING_JSON).read_text())
