@@ -35,8 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.demos.npz_format import finite_frames
-from toolimit.demos.tool_demo import ToolDemo
+from toolimit.demos.tool_demo import ToolDemo, finite_frames
 from toolimit.errors import DemoError
 from toolimit.tools import tool_spec
 

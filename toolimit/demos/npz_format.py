@@ -27,7 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from toolimit.artifacts import atomic_path, load_npz
-from toolimit.demos.tool_demo import ToolDemo
+from toolimit.demos.tool_demo import ToolDemo, finite_frames
 from toolimit.errors import DemoError
 from toolimit.tools import ToolPose, tool_spec
 
@@ -167,18 +167,6 @@ def _points(path: Path, arrays: dict[str, np.ndarray], key: str, width: int = 3)
     if value.ndim != 2 or value.shape[1] != width:
         raise DemoError(f"{path}: key {key!r} must have shape (T, {width}), got {value.shape}")
     return finite_frames(path, key, value, frame_axis=0)
-
-
-def finite_frames(path: Path, key: str, value: np.ndarray, frame_axis: int) -> np.ndarray:
-    """``value`` (2-D, frames along ``frame_axis``) as floats; DemoError naming the file and the key
-    if it is not numeric, or the first frames that hold NaN or inf."""
-    if not np.issubdtype(value.dtype, np.number):
-        raise DemoError(f"{path}: key {key!r} must be numeric, got dtype {value.dtype}")
-    value = value.astype(float)
-    if not np.all(np.isfinite(value)):
-        frames = np.unique(np.nonzero(~np.isfinite(value))[frame_axis])
-        raise DemoError(f"{path}: key {key!r} has NaN or inf at frames {frames[:10].tolist()}")
-    return value
 
 
 def _fps(path: Path, arrays: dict[str, np.ndarray], fps: float | None) -> float:

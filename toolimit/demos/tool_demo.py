@@ -7,6 +7,7 @@ ground at z = 0. Roll about the tool axis is unknown in a demonstration; alignme
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -199,3 +200,16 @@ class ToolDemo:
         norm = np.linalg.norm(axis, axis=1, keepdims=True)
         axis = np.where(norm > 1e-9, axis / np.maximum(norm, 1e-12), np.array([0.0, 0.0, 1.0]))
         return replace(self, head=head, handle=head + axis * self.lengths[:, None])
+
+
+def finite_frames(path: Path, key: str, value: np.ndarray, frame_axis: int) -> np.ndarray:
+    """``value`` (2-D, frames along ``frame_axis``) as floats; DemoError naming the file and the key
+    if it is not numeric, or the first frames that hold NaN or inf. The check every demonstration
+    reader (:mod:`.npz_format`, :mod:`.motion_estimator`) runs on an array it read."""
+    if not np.issubdtype(value.dtype, np.number):
+        raise DemoError(f"{path}: key {key!r} must be numeric, got dtype {value.dtype}")
+    value = value.astype(float)
+    if not np.all(np.isfinite(value)):
+        frames = np.unique(np.nonzero(~np.isfinite(value))[frame_axis])
+        raise DemoError(f"{path}: key {key!r} has NaN or inf at frames {frames[:10].tolist()}")
+    return value

@@ -4,7 +4,8 @@ Under ADR (``adr=True`` of :class:`~toolimit.learn.simulator.TaskSimulator`, ``t
 --adr``) every reset places each instance's goal box at an (x, y) drawn uniformly inside the
 current bounds (:class:`AdrBounds`, world frame, m), and the policy observes it. The bounds start at
 the aligned position (the task's) and move by the rule of the authors' code
-(``../shared/reference/AUTHORS_SETUP.md``), run by :class:`AdrCallback` during PPO:
+(``../shared/reference/AUTHORS_SETUP.md``), run during PPO by
+:class:`~toolimit.learn.adr_callback.AdrCallback`:
 
 * every ``every`` updates, one coordinate and one of its two bounds are picked at random (from the
   seeded generator of :class:`AdrState`, saved in checkpoints so that a resume is exact), and one
@@ -32,18 +33,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any
 
 import numpy as np
-import torch
-from stable_baselines3.common.callbacks import BaseCallback
 
 from toolimit.errors import InputError
 from toolimit.scenes.base import ParameterSpec, Scene
-
-if TYPE_CHECKING:
-    from toolimit.learn.simulator import TaskSimulator
-    from toolimit.learn.vec_env import BatchedTaskVecEnv
 
 #: The scene parameter ADR moves: the spades' goal box (a ``per_instance`` position).
 GOAL_BOX = "goal_position"
@@ -201,57 +196,3 @@ def boundary_test(
     record = {"axis": "xy"[axis], "side": ("low", "high")[side], "bound": before, "return_mean": value, "after": after}
     state.tests.append(record)
     return record
-
-
-class AdrCallback(BaseCallback):
-    """Runs :func:`boundary_test` every ``every`` PPO updates, at an update's start (an episode
-    boundary), on a simulator of its own; after a change the training environment is reset so that
-    this update's episodes draw inside the new bounds, and a checkpoint taken next (after this
-    callback) resumes exactly.
-
-    Args:
-        env: the training environment (``adr=True``); its ``adr`` state is what the tests change.
-        every: updates between tests.
-    """
-
-    def __init__(self, env: BatchedTaskVecEnv, every: int = EVERY):
-        super().__init__()
-        if every < 1:
-            raise ValueError(f"every must be >= 1 update, got {every!r}")
-        if env.adr is None:
-            raise ValueError("the environment has no ADR (make it with adr=True)")
-        self.env, self.state, self.every = env, env.adr, every
-        self.simulator: TaskSimulator = env.simulator.copy(adr=True)
-
-    def _on_rollout_start(self) -> None:
-        steps = self.model.n_steps * self.env.num_envs  # type: ignore[attr-defined]
-        update = self.model.num_timesteps // steps
-        if update == 0 or update % self.every or self.state.tested_at >= update:
-            return
-        record = boundary_test(self.state, self._mean_return, self._placeable)
-        self.state.tested_at = update
-        if record["after"] != record["bound"]:
-            self.model._last_obs = self.env.reset()  # type: ignore[attr-defined]
-            self.model._last_episode_starts = np.ones(self.env.num_envs, dtype=bool)  # type: ignore[attr-defined]
-
-    def _placeable(self, bounds: AdrBounds) -> bool:
-        return bounds.placeable(self.state.rng, self.simulator.box_validity(self.simulator.task.params))
-
-    def _mean_return(self, bounds: AdrBounds) -> float:
-        """Mean return of one batch of episodes with the box drawn inside ``bounds``: the policy's
-        mean plus its Gaussian noise, drawn from the ADR generator (torch's stays untouched)."""
-        simulator, rng = self.simulator, self.state.rng
-        simulator.adr_bounds = bounds
-        policy = self.model.policy
-        std = torch.exp(cast(torch.Tensor, policy.log_std)).detach().numpy()
-        observation = simulator.reset(rng)
-        returns = np.zeros(simulator.batch_size)
-        while not simulator.done:
-            mean, _ = policy.predict(observation, deterministic=True)
-            action = np.clip(mean + std * rng.normal(size=mean.shape), -1.0, 1.0)
-            observation, reward, _ = simulator.step(action)
-            returns += reward
-        return float(returns.mean())
-
-    def _on_step(self) -> bool:
-        return True

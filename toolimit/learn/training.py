@@ -28,7 +28,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from toolimit.artifacts import save_json
 from toolimit.errors import InvalidLearningConfig
 from toolimit.learn.adr import EVERY as ADR_EVERY
-from toolimit.learn.adr import AdrCallback, goal_box_spec
+from toolimit.learn.adr import goal_box_spec
+from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
