@@ -2,8 +2,9 @@
 
 The package is laid out as the pipeline of Zorina et al. (RA-L 2022):
 ``demos`` (i) -> ``scenes`` + ``align`` (ii) -> ``robots`` + ``trajopt`` (iii) -> ``learn`` (iv),
-with ``deploy`` for export to a real robot, ``viz`` for meshcat views and rerun recordings and
-``cli`` for the ``toolimit`` command.
+chained by ``pipeline`` (each stage a function with typed settings, and ``run_pipeline``), with
+``deploy`` for export to a real robot, ``experiments`` for the paper's figure, ``viz`` for meshcat
+views and rerun recordings and ``cli`` for the ``toolimit`` command.
 
 ``import toolimit`` loads none of them: ``toolimit.demos`` (any name of :data:`SUBPACKAGES`)
 imports its subpackage on first access (PEP 562), so that the command line and a user's script
@@ -16,7 +17,7 @@ from types import ModuleType as _ModuleType
 __version__ = "0.1.0"
 
 #: The subpackages a user reaches as attributes of ``toolimit``, imported on first access.
-SUBPACKAGES = ("demos", "scenes", "align", "robots", "trajopt", "learn", "deploy", "experiments", "viz")
+SUBPACKAGES = ("demos", "scenes", "align", "robots", "trajopt", "learn", "pipeline", "deploy", "experiments", "viz")
 
 
 def __getattr__(name: str) -> _ModuleType:

@@ -1,0 +1,128 @@
+"""The pipeline from Python: stage functions, the candidate a trajectory records, README's "From Python"."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from toolimit.artifacts import load_npz, save_npz
+from toolimit.cli import main as toolimit
+from toolimit.learn.task import TaskFileError, task_from_pipeline
+from toolimit.pipeline import PipelineSettings, TrajectoryStage, align_stage, trajopt_from_poses, trajopt_stage
+from toolimit.trajopt.result import TrajectoryResult
+
+REPO = Path(__file__).resolve().parents[1]
+DEMO = REPO / "data" / "demos" / "spade_03.npz"
+QUICK = PipelineSettings.for_world("planar", quick=True)
+
+
+@pytest.fixture(scope="module")
+def stages(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, TrajectoryStage]:
+    """Stages ii and iii of the planar spade on quick budgets: (folder, what trajopt kept)."""
+    out = tmp_path_factory.mktemp("pipeline")
+    align_stage(DEMO, "spade", "planar", out / "alignment", QUICK.align, progress=False)
+    kept = trajopt_stage(out / "alignment", "planar3", out / "trajectory", QUICK.trajopt, progress=False)
+    return out, kept
+
+
+def _best_tool_only(kept: TrajectoryStage) -> int:
+    rewards = [candidate.alignment_reward for candidate in kept.candidates]
+    return int(np.argmax(rewards))
+
+
+def test_the_trajectory_records_the_selected_candidate_not_the_best_aligned(stages) -> None:
+    out, kept = stages
+    assert kept.selection is not None and kept.trajectory.scene is not None
+    chosen = kept.trajectory.scene.candidate
+    assert chosen == kept.selection.best
+    assert chosen != _best_tool_only(kept), "the case this test is about: the robot's choice is not the tool's"
+    loaded = TrajectoryResult.load(out / "trajectory")
+    assert loaded.scene is not None and loaded.scene.candidate == chosen and loaded.scene.world == "planar"
+    task = task_from_pipeline(out / "alignment", out / "trajectory")
+    assert task.source["candidate"] == str(chosen)
+    for name, value in kept.candidates[chosen].params.items():
+        np.testing.assert_allclose(task.params[name], value)
+    best = kept.candidates[_best_tool_only(kept)].params
+    assert any(not np.allclose(task.params[name], best[name]) for name in best)
+
+
+def test_without_selection_the_best_tool_only_candidate_is_tracked_and_recorded(stages, tmp_path: Path) -> None:
+    out, kept = stages
+    settings = dataclasses.replace(QUICK.trajopt, select_by_robot=False, init="hold")
+    alone = trajopt_stage(out / "alignment", "planar3", tmp_path / "trajectory", settings, progress=False)
+    assert alone.selection is None and alone.trajectory.scene is not None
+    assert alone.trajectory.scene.candidate == _best_tool_only(kept)
+    assert not (tmp_path / "trajectory" / "selection.json").exists()
+
+
+def test_a_trajectory_paired_with_another_alignment_is_refused_in_one_line(
+    stages, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out, kept = stages
+    other = tmp_path / "other_alignment"
+    other.mkdir()
+    arrays = load_npz(out / "alignment" / "candidates.npz")
+    name = next(key for key in arrays if key.startswith("param_"))
+    arrays[name] = arrays[name] + 0.05  # another alignment: other scenes for the same indices
+    save_npz(other / "candidates.npz", **arrays)
+    with pytest.raises(TaskFileError, match="of another alignment"):
+        task_from_pipeline(other, out / "trajectory")
+    learned = tmp_path / "learned"
+    assert toolimit(["learn", "--alignment", str(other), "--trajectory", str(out / "trajectory"), "--out", str(learned)]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "another alignment" in error
+    assert not learned.exists()
+
+
+def test_a_trajectory_tracked_from_poses_records_no_scene(stages, tmp_path: Path) -> None:
+    out, kept = stages
+    scene = kept.trajectory.scene
+    assert scene is not None
+    targets = kept.candidates[scene.candidate].targets
+    settings = dataclasses.replace(QUICK.trajopt, init="hold")
+    trajopt_from_poses(targets, "planar3", "spade", tmp_path / "poses_trajectory", settings, progress=False)
+    assert TrajectoryResult.load(tmp_path / "poses_trajectory").scene is None
+    with pytest.raises(TaskFileError, match="records no scene"):
+        task_from_pipeline(out / "alignment", tmp_path / "poses_trajectory")
+
+
+def test_align_refuses_a_demonstration_of_another_tool(tmp_path: Path) -> None:
+    from toolimit.demos import load_demo
+    from toolimit.errors import InputError
+
+    hammer = load_demo(REPO / "data" / "demos" / "hammer_00.npz")
+    with pytest.raises(InputError, match="shows the hammer, not the spade"):
+        align_stage(hammer, "spade", "planar", tmp_path / "alignment", QUICK.align)
+    assert not (tmp_path / "alignment").exists()
+
+
+def _readme_python_block() -> str:
+    readme = (REPO / "README.md").read_text()
+    section = readme.split("## From Python", 1)[1]
+    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+
+
+def test_the_readmes_python_chain_gives_what_toolimit_run_gives(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """README's block, on quick budgets, against ``toolimit run --quick`` with the same seed."""
+    block = _readme_python_block()
+    assert 'PipelineSettings.for_world("planar")' in block and '"runs/spade_python"' in block
+    block = block.replace('PipelineSettings.for_world("planar")', 'PipelineSettings.for_world("planar", quick=True)')
+    block = block.replace('"runs/spade_python"', repr(str(tmp_path / "python")))
+    monkeypatch.chdir(REPO)
+    namespace: dict[str, object] = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    from_python = namespace["evaluation"].record  # type: ignore[attr-defined]
+    command = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo", str(DEMO),
+               "--out", str(tmp_path / "command"), "--quick", "--quiet"]
+    assert toolimit(command) == 0
+    from_command = json.loads((tmp_path / "command" / "evaluation.json").read_text())
+    assert from_python["success_rate"] == from_command["success_rate"]
+    np.testing.assert_allclose(from_python["goal_reward"], from_command["goal_reward"], rtol=1e-6, atol=1e-6)
+    assert "candidate" in capsys.readouterr().out
