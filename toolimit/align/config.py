@@ -23,15 +23,17 @@ from typing import Any
 import numpy as np
 
 from toolimit.errors import InputError
+from toolimit.tools.registry import find_tool
 
-#: The plane a planar scene lives in, keyed by (tool, world): the demonstration is projected onto
-#: it before alignment ("xz": vertical plane, "xy": horizontal plane). Worlds not listed (3D) keep
-#: the demonstration as it is.
-DEMO_PLANES: dict[tuple[str, str], str] = {
-    ("spade", "planar"): "xz",
-    ("hammer", "planar"): "xz",
-    ("scythe", "planar"): "xy",
-}
+
+def demo_plane(tool: str, world: str) -> str | None:
+    """The plane the planar scene of ``tool`` lives in ("xz": vertical plane, "xy": horizontal
+    plane; its record's ``planar_plane``), onto which the demonstration is projected before
+    alignment; None in 3D and for a tool the registry does not know (its demonstration is kept as
+    it is)."""
+    record = find_tool(tool)
+    return record.planar_plane if world == "planar" and record is not None else None
+
 
 #: Planes whose scenes see the tool's working direction x only inside the plane. In the vertical
 #: x-z plane the tool axis lies in the plane, so roll 0 and roll pi (tools.py's convention) are the
