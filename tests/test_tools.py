@@ -6,6 +6,7 @@ from toolimit.errors import DemoError, InputError, NoScriptedMotion
 from toolimit.learn.shipped import environments
 from toolimit.scenes import available_scenes, make_scene, register_scene
 from toolimit.scenes.registry import scripted_motion
+from toolimit.scenes.spatial.tool_geometry import tool_shapes
 from toolimit.tools import (
     TOOLS,
     ToolPose,
@@ -21,6 +22,7 @@ from toolimit.tools import (
     tool_record,
     tool_spec,
 )
+from toolimit.viz.world_elements import world_elements
 
 
 def test_swing_rotation_is_a_rotation_taking_z_to_axis():
@@ -91,6 +93,10 @@ def test_a_registered_tool_is_seen_by_every_reader(fresh_registry):
         synthesize_demo("rake", seed=0)
     with pytest.raises(NoScriptedMotion, match="no scripted motion for the rake"):
         scripted_motion("rake", "planar", {})
+    with pytest.raises(InputError, match="tool 'rake' has no 3D shapes"):
+        tool_shapes("rake")
+    with pytest.raises(ValueError, match="no 3D world view for tool 'rake'; known: spade, hammer, scythe"):
+        world_elements("rake", {})
 
 
 def test_a_taken_name_is_refused_unless_overwritten(fresh_registry):
@@ -110,6 +116,7 @@ def test_a_taken_name_is_refused_unless_overwritten(fresh_registry):
         ({"scripted_motions": {"3d": "m:f"}}, "scripted_motions: no scene in world '3d'"),
         ({"synthetic_motion": "m:"}, "synthetic_motion: expected an entry point"),
         ({"planar_plane": "yz"}, "planar_plane must be one of xz, xy"),
+        ({"shapes": "tool_geometry.spade_shapes"}, "shapes: expected an entry point"),
     ],
 )
 def test_a_bad_record_is_one_input_error(fields, message):

@@ -11,6 +11,8 @@ HAMMER = ToolRecord(
     },
     scripted_motions={"3d": "toolimit.scenes.spatial.strike:scripted_strike"},
     synthetic_motion="toolimit.demos.synthetic:hammer_knots",
+    shapes="toolimit.scenes.spatial.tool_geometry:hammer_shapes",
+    world_view="toolimit.viz.world_elements:hammer_elements",
     # the planar 3-link arm moves in the vertical x-z plane of the planar scene
     default_robots={"planar": "planar3", "3d": "panda"},
     planar_plane="xz",

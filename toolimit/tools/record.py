@@ -60,6 +60,12 @@ class ToolRecord:
             gets a registered Gymnasium id ``toolimit/<Tool><World>-v0``.
         planar_plane: the plane of the tool's planar scene (one of :data:`PLANES`), onto which
             alignment projects the demonstration.
+        shapes: ``"module:function"`` of the tool's 3D shapes in its tool frame,
+            ``function() -> (boxes, capsules)`` (:mod:`toolimit.scenes.spatial.tool_geometry`), for
+            3D contacts and views; None for a tool without them.
+        world_view: ``"module:function"`` drawing the state of its 3D scene,
+            ``function(snapshot) -> list[Element]`` (:mod:`toolimit.viz.world_elements`); None for
+            a tool without 3D views.
     """
 
     spec: ToolSpec
@@ -68,6 +74,8 @@ class ToolRecord:
     synthetic_motion: str | None = None
     default_robots: Mapping[str, str] = field(default_factory=dict)
     planar_plane: str = "xz"
+    shapes: str | None = None
+    world_view: str | None = None
 
     def __post_init__(self) -> None:
         """Checks every field (InputError naming the bad one) and freezes the mappings."""
@@ -92,6 +100,8 @@ class ToolRecord:
             *((f"scenes[{w!r}]", e) for w, e in self.scenes.items()),
             *((f"scripted_motions[{w!r}]", e) for w, e in self.scripted_motions.items()),
             ("synthetic_motion", self.synthetic_motion),
+            ("shapes", self.shapes),
+            ("world_view", self.world_view),
         ]:
             if entry_point is not None:
                 check_entry_point(entry_point, f"tool {name!r}: {what}")

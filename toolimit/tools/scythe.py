@@ -11,6 +11,8 @@ SCYTHE = ToolRecord(
     },
     scripted_motions={"3d": "toolimit.scenes.spatial.sweep:scripted_sweep"},
     synthetic_motion="toolimit.demos.synthetic:scythe_knots",
+    shapes="toolimit.scenes.spatial.tool_geometry:scythe_shapes",
+    world_view="toolimit.viz.world_elements:scythe_elements",
     # The planar scythe's world is the horizontal x-y plane, which an arm moving in a vertical
     # plane (planar3) cannot sweep: the Panda holds that scythe.
     default_robots={"planar": "panda", "3d": "panda"},

@@ -14,6 +14,8 @@ SPADE = ToolRecord(
         "3d": "toolimit.scenes.spatial.scoop:scripted_scoop",
     },
     synthetic_motion="toolimit.demos.synthetic:spade_knots",
+    shapes="toolimit.scenes.spatial.tool_geometry:spade_shapes",
+    world_view="toolimit.viz.world_elements:spade_elements",
     # the planar 3-link arm moves in the vertical x-z plane of the planar scene
     default_robots={"planar": "planar3", "3d": "panda"},
     planar_plane="xz",
