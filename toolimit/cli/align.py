@@ -109,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from toolimit.align.search import SearchInterrupted, align
     from toolimit.demos import load_demo
+    from toolimit.tools import tool_record
 
     workers = _check_arguments(args)
     demo = load_demo(args.demo, tool=args.tool)  # also names the tool of files that do not store it
@@ -173,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
         f"best: sample {best.index}, mean goal reward {best.reward:.3f} "
         f"(scale {best.sample.scale}, z offset {best.sample.z_offset:+.3f} m)"
     )
-    robot = "panda" if args.world == "3d" else "planar3"
+    robot = tool_record(args.tool).default_robots.get(args.world, "ROBOT")  # the record's robot for this world
     print(
         f"wrote {args.out / ALIGNMENT_JSON}, {args.out / CANDIDATES_NPZ} and {args.out / ALIGNED_DEMO_NPZ}; next: "
         f"toolimit trajopt --robot {robot} --tool {args.tool} --alignment {args.out} --out {args.out}_{robot}"
