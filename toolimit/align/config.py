@@ -36,10 +36,11 @@ def demo_plane(tool: str, world: str) -> str | None:
 
 
 #: Planes whose scenes see the tool's working direction x only inside the plane. In the vertical
-#: x-z plane the tool axis lies in the plane, so roll 0 and roll pi (tools.py's convention) are the
-#: two ways the blade can face within it; any other roll points x out of the plane, where a planar
-#: scene cannot show it and a planar arm cannot hold it. Turning the blade over from one face to the
-#: other would leave the plane, so a planar sample keeps one face for the whole motion.
+#: x-z plane the tool axis lies in the plane, so roll 0 and roll pi (the convention of
+#: :mod:`toolimit.tools.frame`) are the two ways the blade can face within it; any other roll
+#: points x out of the plane, where a planar scene cannot show it and a planar arm cannot hold it.
+#: Turning the blade over from one face to the other would leave the plane, so a planar sample
+#: keeps one face for the whole motion.
 IN_PLANE_ROLLS: dict[str, tuple[float, float]] = {"xz": (0.0, float(np.pi))}
 
 #: Index of the world axis normal to each plane (the coordinate a planar scene ignores).
