@@ -9,8 +9,8 @@ Poses are written in a *local* frame (x forward, y left, z up, metres, ground at
 ``q = (hand_x, hand_y, hand_z, beta, psi)``: the handle end (the hand) and the direction of the
 tool from the hand to the head, ``(cos beta cos psi, cos beta sin psi, -sin beta)``: ``beta`` is
 how far the head hangs below the hand (rad), ``psi`` a small yaw of the tool out of the motion
-plane. The scythe uses its own coordinates (see :func:`scythe_knots`). The finished paths are turned by
-a random yaw and shifted by a random horizontal offset into the world frame.
+plane. The scythe uses its own coordinates (see :func:`scythe_knots`). The finished paths are
+turned by a random yaw and shifted by a random horizontal offset into the world frame.
 
 Everything random comes from ``numpy.random.default_rng`` seeded by ``seed``; the clean motion and
 the noise use two independent child streams, so ``noise=False`` gives the noisy demo's clean motion.
