@@ -40,7 +40,7 @@ TOOL_NAMES = ("spade", "hammer", "scythe")
 #: The real trajectories and the world they are aligned in (their tool comes from the file name).
 REAL_FILES = ("spade_video1_aligned.npz", "spade_example_aligned.npz", "hammer_video1_aligned.npz")
 #: Sources whose content decides an alignment's outcome (fingerprinted in every run's record).
-OUTCOME_SOURCES = ("toolimit/align", "toolimit/scenes", "toolimit/demos", "toolimit/tools.py")
+OUTCOME_SOURCES = ("toolimit/align", "toolimit/scenes", "toolimit/demos", "toolimit/tools")
 
 
 def code_fingerprint() -> str:

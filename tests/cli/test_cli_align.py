@@ -12,17 +12,24 @@ from scipy.spatial.transform import Rotation
 
 from toolimit.cli import main
 from toolimit.demos import load_demo, save_demo
-from toolimit.scenes import registry
+from toolimit.scenes import register_scene
+from toolimit.tools import registry as tool_registry
 from toolimit.tools import roll_of
 
 ALIGN_TESTS = Path(__file__).resolve().parents[1] / "align"
+
+
+def use_planar_spade_scene(monkeypatch, entry_point: str) -> None:
+    """("spade", "planar") made by ``entry_point`` in this test (the tool registry is restored after it)."""
+    monkeypatch.setattr(tool_registry, "_RECORDS", dict(tool_registry._RECORDS))
+    register_scene("spade", "planar", entry_point)
 
 
 @pytest.fixture
 def fake_scene(monkeypatch):
     """("spade", "planar") made by the alignment tests' fake target scene (in this process)."""
     monkeypatch.syspath_prepend(str(ALIGN_TESTS))
-    monkeypatch.setitem(registry._ENTRY_POINTS, ("spade", "planar"), "align_fake_scene:FakeTargetScene")
+    use_planar_spade_scene(monkeypatch, "align_fake_scene:FakeTargetScene")
     from align_fake_scene import make_demo
 
     return make_demo
@@ -129,7 +136,7 @@ def test_writes_record_and_aligned_demo(capsys, tmp_path, demo_file):
 
 
 def test_no_candidate_exit_1_with_empty_record(capsys, tmp_path, demo_file, monkeypatch):
-    monkeypatch.setitem(registry._ENTRY_POINTS, ("spade", "planar"), "align_fake_scene:UnreachableTargetScene")
+    use_planar_spade_scene(monkeypatch, "align_fake_scene:UnreachableTargetScene")
     out = tmp_path / "run"
     out.mkdir()
     (out / "aligned_demo.npz").write_text("stale")

@@ -9,9 +9,15 @@ from gymnasium.utils.env_checker import check_env
 
 import toolimit.learn  # noqa: F401  (registers the ids)
 from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, ToolUseEnv, env_id
+from toolimit.learn.shipped import environments
 from toolimit.learn.simulator import velocity_penalty
 
-IDS = [env_id(tool, world) for tool in ENV_TOOLS for world in ENV_WORLDS]
+IDS = [env_id(tool, world) for tool, world in environments()]
+
+
+def test_the_built_in_tools_have_an_id_in_both_worlds():
+    assert set(IDS) == {env_id(tool, world) for tool in ("spade", "hammer", "scythe") for world in ENV_WORLDS}
+    assert tuple(ENV_TOOLS) == ("spade", "hammer", "scythe")
 
 
 @pytest.mark.parametrize("name", IDS)

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from toolimit.robots import ROBOTS, make_robot
+from toolimit.errors import InputError
+from toolimit.robots import ROBOTS, ArmDescription, arms, make_robot, register_robot, registry
 from toolimit.tools import tool_spec
 
 
@@ -134,3 +137,28 @@ def test_check_configuration_names_the_joint():
     q[3] = 0.5
     with pytest.raises(ValueError, match="panda_joint4"):
         panda.check_configuration(q)
+
+
+@pytest.fixture
+def fresh_registry(monkeypatch):
+    """The robot registry as it is, restored after the test."""
+    monkeypatch.setattr(registry, "_BUILDERS", dict(registry._BUILDERS))
+
+
+def test_a_registered_robot_is_built_and_listed(fresh_registry):
+    def small() -> ArmDescription:
+        return dataclasses.replace(arms.planar3(), name="small")
+
+    register_robot("small", small)
+    assert "small" in ROBOTS and list(ROBOTS)[-1] == "small"  # ROBOTS follows the registry
+    assert make_robot("small", tool="hammer").name == "small"
+
+
+def test_bad_registrations_are_one_input_error(fresh_registry):
+    with pytest.raises(InputError, match="robot 'panda' is already registered"):
+        register_robot("panda", arms.panda)
+    with pytest.raises(InputError, match="robot 'arm': the builder must be callable"):
+        register_robot("arm", "toolimit.robots.arms:panda")
+    register_robot("renamed", arms.planar3)
+    with pytest.raises(InputError, match="robot 'renamed': its builder's ArmDescription is named 'planar3'"):
+        make_robot("renamed")

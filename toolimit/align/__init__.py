@@ -5,7 +5,7 @@ candidates are the first K samples (scale, z offset, rolls, scene parameters) un
 demonstration earns a goal reward. ``write_alignment`` saves it in the project's file formats.
 """
 
-from toolimit.align.config import DEMO_PLANES, AlignmentConfig
+from toolimit.align.config import AlignmentConfig, demo_plane
 from toolimit.align.keypoints import velocity_keypoints
 from toolimit.align.outputs import write_alignment
 from toolimit.align.sampler import (
@@ -18,7 +18,6 @@ from toolimit.align.sampler import (
 from toolimit.align.search import AlignmentResult, Candidate, SearchInterrupted, align, prepare_demo
 
 __all__ = [
-    "DEMO_PLANES",
     "AlignmentConfig",
     "AlignmentResult",
     "AlignmentSample",
@@ -26,6 +25,7 @@ __all__ = [
     "SearchInterrupted",
     "align",
     "apply_alignment_sample",
+    "demo_plane",
     "draw_alignment_sample",
     "minimum_element_distance",
     "prepare_demo",

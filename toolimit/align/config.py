@@ -23,21 +23,24 @@ from typing import Any
 import numpy as np
 
 from toolimit.errors import InvalidSetting
+from toolimit.tools.registry import find_tool
 
-#: The plane a planar scene lives in, keyed by (tool, world): the demonstration is projected onto
-#: it before alignment ("xz": vertical plane, "xy": horizontal plane). Worlds not listed (3D) keep
-#: the demonstration as it is.
-DEMO_PLANES: dict[tuple[str, str], str] = {
-    ("spade", "planar"): "xz",
-    ("hammer", "planar"): "xz",
-    ("scythe", "planar"): "xy",
-}
+
+def demo_plane(tool: str, world: str) -> str | None:
+    """The plane the planar scene of ``tool`` lives in ("xz": vertical plane, "xy": horizontal
+    plane; its record's ``planar_plane``), onto which the demonstration is projected before
+    alignment; None in 3D and for a tool the registry does not know (its demonstration is kept as
+    it is)."""
+    record = find_tool(tool)
+    return record.planar_plane if world == "planar" and record is not None else None
+
 
 #: Planes whose scenes see the tool's working direction x only inside the plane. In the vertical
-#: x-z plane the tool axis lies in the plane, so roll 0 and roll pi (tools.py's convention) are the
-#: two ways the blade can face within it; any other roll points x out of the plane, where a planar
-#: scene cannot show it and a planar arm cannot hold it. Turning the blade over from one face to the
-#: other would leave the plane, so a planar sample keeps one face for the whole motion.
+#: x-z plane the tool axis lies in the plane, so roll 0 and roll pi (the convention of
+#: :mod:`toolimit.tools.frame`) are the two ways the blade can face within it; any other roll
+#: points x out of the plane, where a planar scene cannot show it and a planar arm cannot hold it.
+#: Turning the blade over from one face to the other would leave the plane, so a planar sample
+#: keeps one face for the whole motion.
 IN_PLANE_ROLLS: dict[str, tuple[float, float]] = {"xz": (0.0, float(np.pi))}
 
 #: Index of the world axis normal to each plane (the coordinate a planar scene ignores).

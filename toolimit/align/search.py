@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from toolimit.align.checkpoint import checkpoint_key, load_checkpoint, save_checkpoint
-from toolimit.align.config import DEMO_PLANES, AlignmentConfig
+from toolimit.align.config import AlignmentConfig, demo_plane
 from toolimit.align.keypoints import velocity_keypoints
 from toolimit.align.sampler import (
     AlignmentSample,
@@ -159,7 +159,7 @@ def prepare_demo(demo: ToolDemo, tool: str, world: str, control_dt: float) -> tu
     fps = 1.0 / control_dt
     if not np.isclose(demo.fps, fps):
         demo = demo.resampled(fps)
-    plane = DEMO_PLANES.get((tool, world))
+    plane = demo_plane(tool, world)
     if plane is not None:
         demo = demo.projected_to_plane(plane)
     return demo, plane
@@ -308,7 +308,7 @@ def align(
     that cleanup is ignored.
 
     The demo is resampled to the scene's control rate and projected onto the world's plane
-    (:data:`~toolimit.align.config.DEMO_PLANES`); keypoints and the minimum element distance d_th
+    (:func:`~toolimit.align.config.demo_plane`); keypoints and the minimum element distance d_th
     come from that prepared demo's head path. Workers are started with the "spawn" method: a
     script calling ``align(..., workers > 1)`` needs the ``if __name__ == "__main__":`` guard.
     """

@@ -113,8 +113,10 @@ def add_scene_arguments(parser: argparse.ArgumentParser, default_world: str) -> 
 
 
 def add_tool_argument(parser: argparse.ArgumentParser) -> None:
-    """``--tool`` (required): the tool a command works with."""
-    parser.add_argument("--tool", required=True, help="spade, hammer or scythe")
+    """``--tool`` (required): the tool a command works with, one of the registered tools."""
+    from toolimit.tools import TOOLS
+
+    parser.add_argument("--tool", required=True, help=", ".join(TOOLS))
 
 
 def add_world_argument(parser: argparse.ArgumentParser, default: str) -> None:

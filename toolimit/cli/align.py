@@ -81,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     from toolimit.align.outputs import ALIGNED_DEMO_NPZ, ALIGNMENT_JSON, CANDIDATES_NPZ, CHECKPOINT_JSON
     from toolimit.align.search import SearchInterrupted
     from toolimit.pipeline.stages import align_stage, describe_alignment
+    from toolimit.tools import tool_record
 
     settings = _check_arguments(args)
     checkpoint = args.out / CHECKPOINT_JSON
@@ -110,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         from toolimit.viz.meshcat_alignment import save_alignment_html
 
         print(f"meshcat replay of the best candidate: {save_alignment_html(result, args.html)}")
-    robot = "panda" if args.world == "3d" else "planar3"
+    robot = tool_record(args.tool).default_robots.get(args.world, "ROBOT")  # the record's robot for this world
     print(
         f"wrote {args.out / ALIGNMENT_JSON}, {args.out / CANDIDATES_NPZ} and {args.out / ALIGNED_DEMO_NPZ}; next: "
         f"toolimit trajopt --robot {robot} --tool {args.tool} --alignment {args.out} --out {args.out}_{robot}"

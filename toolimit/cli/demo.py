@@ -39,9 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_synth(args: argparse.Namespace) -> int:
     from toolimit.demos import save_demo, synthesize_demo
-    from toolimit.tools import TOOLS
+    from toolimit.demos.synthetic import synthetic_tools
 
-    check_choice("--tool", args.tool, sorted(TOOLS), "tool")
+    check_choice("--tool", args.tool, synthetic_tools(), "tool")
     check_count("--seed", args.seed, minimum=0)
     if not args.fps > 0:
         raise CliError(f"--fps: must be positive, got {args.fps}")

@@ -29,7 +29,7 @@ from scipy.spatial.transform import Rotation
 from toolimit.artifacts import atomic_path, load_npz
 from toolimit.demos.tool_demo import ToolDemo, finite_frames
 from toolimit.errors import DemoError
-from toolimit.tools import ToolPose, tool_spec
+from toolimit.tools import TOOLS, ToolPose, tool_spec
 
 #: Spade tip frame -> handle end: ``p_handle = p_tip - R_tip @ SPADE_TIP_TO_HANDLE`` (metres).
 #: The original tool model puts the tip at (0, 0.045, 0.40) m from the handle mount, rotated
@@ -154,10 +154,10 @@ def _tool_name(path: Path, tool: str | None) -> str:
             raise DemoError(f"{path}: {error}") from None
         return tool
     stem = path.stem.lower()
-    for name in ("spade", "hammer", "scythe"):
+    for name in TOOLS:
         if stem.startswith(name):
             return name
-    raise DemoError(f"{path}: the file does not say which tool it shows; pass tool= ('spade', 'hammer' or 'scythe')")
+    raise DemoError(f"{path}: the file does not say which tool it shows; pass tool= (one of {', '.join(TOOLS)})")
 
 
 def _points(path: Path, arrays: dict[str, np.ndarray], key: str, width: int = 3) -> np.ndarray:

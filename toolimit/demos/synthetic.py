@@ -9,11 +9,15 @@ Poses are written in a *local* frame (x forward, y left, z up, metres, ground at
 ``q = (hand_x, hand_y, hand_z, beta, psi)``: the handle end (the hand) and the direction of the
 tool from the hand to the head, ``(cos beta cos psi, cos beta sin psi, -sin beta)``: ``beta`` is
 how far the head hangs below the hand (rad), ``psi`` a small yaw of the tool out of the motion
-plane. The scythe uses its own coordinates (see :func:`_scythe`). The finished paths are turned by
-a random yaw and shifted by a random horizontal offset into the world frame.
+plane. The scythe uses its own coordinates (see :func:`scythe_knots`). The finished paths are
+turned by a random yaw and shifted by a random horizontal offset into the world frame.
 
 Everything random comes from ``numpy.random.default_rng`` seeded by ``seed``; the clean motion and
 the noise use two independent child streams, so ``noise=False`` gives the noisy demo's clean motion.
+
+A tool's generator (:data:`KnotGenerator`) is named by its record's ``synthetic_motion``
+(:mod:`toolimit.tools.registry`): :func:`spade_knots`, :func:`hammer_knots`, :func:`scythe_knots`
+here, or any "module:function" of a registered tool.
 """
 
 from __future__ import annotations
@@ -25,11 +29,10 @@ import numpy as np
 
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.errors import DemoError
-from toolimit.tools import tool_spec
+from toolimit.tools.registry import find_tool, load_entry_point, tool_records, tool_spec
 
 #: Demonstration length bounds, seconds.
 MIN_DURATION, MAX_DURATION = 2.5, 6.0
-SYNTHETIC_TOOLS = ("spade", "hammer", "scythe")
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,16 @@ def hand_from_head(head, beta: float, psi: float, length: float) -> np.ndarray:
     return np.concatenate([np.asarray(head, dtype=float) - length * direction, [beta, psi]])
 
 
+#: What a tool's generator returns: the knots of its motion, in its own coordinates ``q``; the
+#: function ``points(q) -> (head, handle)`` turning sampled coordinates (T, n) into the tool's
+#: head and handle points (T, 3), local frame, metres; its events (see :class:`SyntheticMotion`);
+#: and its sampled task quantities.
+KnotMotion = tuple[list[Knot], Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], dict[str, list], dict[str, float]]
+#: A tool's generator (its record's ``synthetic_motion``): ``generator(rng, fps) -> KnotMotion``,
+#: every random draw from ``rng``.
+KnotGenerator = Callable[[np.random.Generator, float], KnotMotion]
+
+
 @dataclass(frozen=True)
 class SyntheticMotion:
     """A generated demonstration with what was put in it.
@@ -121,7 +134,7 @@ def _frames(rng: np.random.Generator, low_s: float, high_s: float, fps: float, m
 
 
 # --- spade -------------------------------------------------------------------------------------
-def _spade(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable, dict, dict]:
+def spade_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
     """Rest, reach down, scoop (push forward at ground level), lift, carry level, tip (dump), return."""
     L = tool_spec("spade").length
     deg = np.deg2rad
@@ -201,7 +214,7 @@ def _spade(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable, 
 
 
 # --- hammer ------------------------------------------------------------------------------------
-def _hammer(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable, dict, dict]:
+def hammer_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
     """Aim above the nail, then 2-4 strikes: raise, strike the nail head at speed, short rebound."""
     L = tool_spec("hammer").length
     deg = np.deg2rad
@@ -279,7 +292,7 @@ def _hammer(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable,
 
 
 # --- scythe ------------------------------------------------------------------------------------
-def _scythe(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable, dict, dict]:
+def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
     """1-3 low sweeps from right to left around the body, stepping forward between sweeps.
 
     Coordinates ``q = (theta, radius, head_z, beta, pivot_x, pivot_y)``: the blade (head) at angle
@@ -359,9 +372,6 @@ def _scythe(rng: np.random.Generator, fps: float) -> tuple[list[Knot], Callable,
     return knots, points, {"sweeps": sweeps}, params
 
 
-_GENERATORS = {"spade": _spade, "hammer": _hammer, "scythe": _scythe}
-
-
 # --- noise -------------------------------------------------------------------------------------
 def add_reconstruction_noise(
     head: np.ndarray, handle: np.ndarray, rng: np.random.Generator
@@ -418,18 +428,32 @@ def add_reconstruction_noise(
 
 
 # --- public API --------------------------------------------------------------------------------
+def synthetic_tools() -> list[str]:
+    """The registered tools with a synthetic-demonstration generator, sorted."""
+    return sorted(record.name for record in tool_records() if record.synthetic_motion is not None)
+
+
+def synthetic_generator(tool: str) -> KnotGenerator:
+    """The generator of ``tool``'s synthetic motions (its record's ``synthetic_motion``); DemoError
+    for a tool without one."""
+    record = find_tool(tool)
+    entry_point = None if record is None else record.synthetic_motion
+    if entry_point is None:
+        raise DemoError(f"tool: no synthetic demonstrations for {tool!r}; known: {', '.join(synthetic_tools())}")
+    return load_entry_point(entry_point)
+
+
 def synthesize_motion(tool: str, seed: int, fps: float = 24) -> SyntheticMotion:
     """A seeded synthetic demonstration of ``tool``, clean and noisy, with its events.
 
     The local motion is turned by a yaw drawn in [-pi, pi) and shifted by up to 0.2 m in x and y
     (world frame, metres, z up, ground z = 0). 2.5-6 s long, starting and ending at rest.
     """
-    if tool not in _GENERATORS:
-        raise DemoError(f"tool: no synthetic demonstrations for {tool!r}; known: {', '.join(SYNTHETIC_TOOLS)}")
+    generator = synthetic_generator(tool)
     if not fps > 0:
         raise DemoError(f"fps must be positive, got {fps}")
     motion_rng, noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
-    knots, points, events, params = _GENERATORS[tool](motion_rng, float(fps))
+    knots, points, events, params = generator(motion_rng, float(fps))
     minimum_frames = int(np.ceil(MIN_DURATION * fps)) + 1
     if knots[-1].frame + 1 < minimum_frames:  # hold the last pose a little longer
         knots.append(_knot(minimum_frames - 1, knots[-1].q))

@@ -5,9 +5,11 @@ task's horizon H and ends with ``truncated=True`` (``terminated`` is never set: 
 task early). ``info`` holds ``goal_reward`` (the scene's goal reward after the step) and, at the
 last step, ``is_success`` (the paper's criterion over the episode).
 
-Registered ids (:func:`register_environments`, run on ``import toolimit.learn``):
-``toolimit/<Tool><World>-v0`` for Spade, Hammer, Scythe x 3D, Planar. Each starts from a shipped
-task (:mod:`toolimit.learn.shipped`): the Panda in 3D, the planar 3-link arm in the plane.
+Registered ids (:func:`register_environments`, run on ``import toolimit.learn``; call it again
+after registering a tool): ``toolimit/<Tool><World>-v0`` for every registered tool with a scene and
+a default robot in that world (:func:`toolimit.learn.shipped.environments`): Spade, Hammer, Scythe x
+3D, Planar for the built-in tools. Each starts from a shipped task (:mod:`toolimit.learn.shipped`):
+the Panda in 3D, the planar 3-link arm in the plane.
 Keywords: ``task=`` a :class:`LearningTask` or a task file of your own run (``toolimit learn``
 makes one), ``robot=`` another robot's shipped task, ``scene_kwargs=`` the scene's constructor,
 ``reward="dense"`` the dense-reward baseline's reward, ``adr=True`` the goal box drawn at every
@@ -23,13 +25,16 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from toolimit.learn.shipped import environments, shipped_task
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
+from toolimit.live_names import LiveNames
 from toolimit.scenes.base import WORLD_HALF_SIZE
 
-#: (tool, world) of every registered id, and the id's spelling of the world.
+#: The id's spelling of each world.
 ENV_WORLDS = {"3d": "3D", "planar": "Planar"}
-ENV_TOOLS = ("spade", "hammer", "scythe")
+#: The tools with a registered id in some world (a live view of the tool registry).
+ENV_TOOLS = LiveNames("ENV_TOOLS", lambda: tuple(dict.fromkeys(tool for tool, _ in environments())))
 
 
 def env_id(tool: str, world: str) -> str:
@@ -62,8 +67,6 @@ def resolve_task(
 ) -> LearningTask:
     """The task an environment starts from: ``task`` itself, a task file, or the shipped task of
     (tool, world, robot). Raises ValueError if a given task does not match tool and world."""
-    from toolimit.learn.shipped import shipped_task
-
     if task is None:
         return shipped_task(tool, world, robot)
     resolved = task if isinstance(task, LearningTask) else LearningTask.load(task)
@@ -112,14 +115,14 @@ class ToolUseEnv(gym.Env):
 
 
 def register_environments() -> None:
-    """Register ``toolimit/<Tool><World>-v0`` for every tool and world (idempotent)."""
-    for tool in ENV_TOOLS:
-        for world in ENV_WORLDS:
-            name = env_id(tool, world)
-            if name not in gym.registry:
-                gym.register(
-                    name,
-                    entry_point="toolimit.learn.env:ToolUseEnv",
-                    kwargs={"tool": tool, "world": world},
-                    disable_env_checker=False,
-                )
+    """Register ``toolimit/<Tool><World>-v0`` for every (tool, world) of
+    :func:`~toolimit.learn.shipped.environments` (idempotent)."""
+    for tool, world in environments():
+        name = env_id(tool, world)
+        if name not in gym.registry:
+            gym.register(
+                name,
+                entry_point="toolimit.learn.env:ToolUseEnv",
+                kwargs={"tool": tool, "world": world},
+                disable_env_checker=False,
+            )

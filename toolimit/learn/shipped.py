@@ -12,21 +12,32 @@ from pathlib import Path
 
 from toolimit.errors import InputError
 from toolimit.learn.task import LearningTask
+from toolimit.tools.registry import tool_record, tool_records
 
 TASKS_DIR = Path(__file__).resolve().parent / "tasks"
-#: The robot of each (tool, world) when none is asked for: the Panda in 3D, the planar 3-link arm in
-#: the vertical x-z plane. The planar scythe's world is the horizontal x-y plane, which an arm moving
-#: in a vertical plane cannot sweep: the Panda holds that scythe.
-DEFAULT_ROBOTS = {(tool, "3d"): "panda" for tool in ("spade", "hammer", "scythe")} | {
-    ("spade", "planar"): "planar3",
-    ("hammer", "planar"): "planar3",
-    ("scythe", "planar"): "panda",
-}
+
+
+def environments() -> list[tuple[str, str]]:
+    """(tool, world) of every registered tool with a scene and a default robot in that world (its
+    record's ``default_robots``): the pairs that have a shipped task and a registered id."""
+    return [
+        (record.name, world) for record in tool_records() for world in record.scenes if world in record.default_robots
+    ]
+
+
+def default_robot(tool: str, world: str) -> str:
+    """The robot of the shipped task of (tool, world) (the tool record's ``default_robots``: the
+    Panda in 3D, the planar 3-link arm in the vertical x-z plane); InputError for a pair without
+    one."""
+    if (tool, world) not in environments():
+        known = ", ".join(f"{t}/{w}" for t, w in environments())
+        raise InputError(f"no environment for the {tool!r} in world {world!r}; known: {known}")
+    return tool_record(tool).default_robots[world]
 
 
 def shipped_task_path(tool: str, world: str, robot: str | None = None) -> Path:
     """Where the shipped task of (tool, world, robot) lives (it may not exist)."""
-    return TASKS_DIR / f"{tool}_{world}_{robot or DEFAULT_ROBOTS[(tool, world)]}.npz"
+    return TASKS_DIR / f"{tool}_{world}_{robot or default_robot(tool, world)}.npz"
 
 
 def shipped_tasks() -> list[tuple[str, str, str]]:
@@ -36,15 +47,11 @@ def shipped_tasks() -> list[tuple[str, str, str]]:
 
 def shipped_task(tool: str, world: str, robot: str | None = None) -> LearningTask:
     """The shipped task; InputError listing the shipped ones if there is none for these names."""
-    if (tool, world) not in DEFAULT_ROBOTS:
-        raise InputError(
-            f"no environment for the {tool!r} in world {world!r}; "
-            f"known: {', '.join(f'{t}/{w}' for t, w in DEFAULT_ROBOTS)}"
-        )
-    path = shipped_task_path(tool, world, robot)
+    default = default_robot(tool, world)  # InputError for a pair without an environment
+    name = robot or default
+    path = shipped_task_path(tool, world, name)
     if not path.is_file():
         known = ", ".join("/".join(names) for names in shipped_tasks())
-        name = robot or DEFAULT_ROBOTS[(tool, world)]
         raise InputError(
             f"no shipped task for the {tool} in {world} with robot {name}; shipped: {known}; "
             "build your own with `toolimit run` and pass task=DIR/task.npz"

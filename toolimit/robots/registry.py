@@ -1,4 +1,4 @@
-"""Robots by name: ``make_robot("panda", tool="spade")``."""
+"""Robots by name: ``make_robot("panda", tool="spade")``; a new one: ``register_robot(name, builder)``."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from collections.abc import Callable
 import pinocchio as pin
 
 from toolimit.errors import InputError
+from toolimit.live_names import LiveNames
 from toolimit.robots import arms
 from toolimit.robots.model import ArmDescription, RobotModel, build_robot_model
 from toolimit.tools import tool_spec
@@ -19,7 +20,23 @@ _BUILDERS: dict[str, Callable[[], ArmDescription]] = {
     "talos": arms.talos,
 }
 
-ROBOTS = tuple(_BUILDERS)
+#: The registered robot names (a live view: a robot registered later appears in it).
+ROBOTS = LiveNames("ROBOTS", lambda: tuple(_BUILDERS))
+
+
+def register_robot(name: str, builder: Callable[[], ArmDescription]) -> None:
+    """Make ``name`` a robot of :func:`make_robot`: ``builder()`` returns its
+    :class:`~toolimit.robots.model.ArmDescription` (active joints, flange and mount rotation, rest
+    pose, base height and base coordinates; see :mod:`toolimit.robots.arms` for examples), called
+    once, on the robot's first use. InputError for a name already taken or a builder that is not
+    callable."""
+    if not isinstance(name, str) or not name:
+        raise InputError(f"robot name: expected a non-empty string, got {name!r}")
+    if name in _BUILDERS:
+        raise InputError(f"robot {name!r} is already registered")
+    if not callable(builder):
+        raise InputError(f"robot {name!r}: the builder must be callable, got {type(builder).__name__}")
+    _BUILDERS[name] = builder
 
 
 def make_robot(
@@ -47,4 +64,9 @@ def make_robot(
 def _arm(name: str) -> ArmDescription:
     """The arm description, built once per process (loading a URDF takes up to a second);
     ``build_robot_model`` copies its Pinocchio model, so the cached one is never modified."""
-    return _BUILDERS[name]()
+    arm = _BUILDERS[name]()
+    if not isinstance(arm, ArmDescription):
+        raise InputError(f"robot {name!r}: its builder returned a {type(arm).__name__}, not an ArmDescription")
+    if arm.name != name:
+        raise InputError(f"robot {name!r}: its builder's ArmDescription is named {arm.name!r}")
+    return arm

@@ -1,74 +1,62 @@
 """Scenes by name: ``make_scene(tool, world)``; their hand-made solving motions: ``scripted_motion``.
 
-Entry points are strings ("module:Class") so that choosing a planar scene never imports the 3D
-code and vice versa. Stages ask the registry; they never branch on the tool's name.
+Both read the tool registry (:mod:`toolimit.tools.registry`): each tool's record names its scene
+class and scripted motion per world as "module:name" strings, imported only here, so that choosing
+a planar scene never imports the 3D code and vice versa. Stages ask this module; they never branch
+on the tool's name.
 """
 
 from __future__ import annotations
 
-import importlib
+from dataclasses import replace
 from typing import Any
 
 from toolimit.errors import InputError, NoScriptedMotion
 from toolimit.scenes.base import CONTROL_FPS, Scene, SceneParams
-from toolimit.tools import ToolPose
+from toolimit.tools.frame import ToolPose
+from toolimit.tools.record import WORLDS
+from toolimit.tools.registry import find_tool, load_entry_point, register_tool, tool_record, tool_records
 
-WORLDS = ("planar", "3d")
-
-_ENTRY_POINTS: dict[tuple[str, str], str] = {
-    ("spade", "planar"): "toolimit.scenes.planar.spade:PlanarSpadeScene",
-    ("hammer", "planar"): "toolimit.scenes.planar.hammer:PlanarHammerScene",
-    ("scythe", "planar"): "toolimit.scenes.planar.scythe:PlanarScytheScene",
-    ("spade", "3d"): "toolimit.scenes.spatial.spade:SpatialSpadeScene",
-    ("hammer", "3d"): "toolimit.scenes.spatial.hammer:SpatialHammerScene",
-    ("scythe", "3d"): "toolimit.scenes.spatial.scythe:SpatialScytheScene",
-}
-
-#: Hand-made tool motions that solve a scene for its parameters, without any video: the LfD
-#: baseline's kinesthetic demonstrations (:mod:`toolimit.learn.kinesthetic`), tests and notebooks.
-_SCRIPTED_MOTIONS: dict[tuple[str, str], str] = {
-    ("spade", "planar"): "toolimit.scenes.planar.scoop:scripted_scoop",
-    ("spade", "3d"): "toolimit.scenes.spatial.scoop:scripted_scoop",
-    ("hammer", "3d"): "toolimit.scenes.spatial.strike:scripted_strike",
-    ("scythe", "3d"): "toolimit.scenes.spatial.sweep:scripted_sweep",
-}
+__all__ = ["WORLDS", "available_scenes", "make_scene", "register_scene", "scripted_motion"]
 
 
 def available_scenes() -> list[tuple[str, str]]:
     """The (tool, world) pairs that have a scene."""
-    return sorted(_ENTRY_POINTS)
+    return sorted((record.name, world) for record in tool_records() for world in record.scenes)
 
 
 def register_scene(tool: str, world: str, entry_point: str) -> None:
-    """Add a scene class given as "module:Class" (for researchers' own scenes)."""
-    _ENTRY_POINTS[(tool, world)] = entry_point
+    """Give the registered ``tool`` the scene class ``entry_point`` ("module:Class") in ``world``,
+    replacing the one it had (for researchers' own scenes of a known tool)."""
+    check_world(world)
+    record = tool_record(tool)
+    register_tool(replace(record, scenes={**record.scenes, world: entry_point}), overwrite=True)
 
 
 def make_scene(tool: str, world: str, **kwargs: Any) -> Scene:
     """A new scene for ``tool`` in ``world``; keyword arguments go to its constructor."""
-    if world not in WORLDS:
-        raise InputError(f"unknown world {world!r}; known worlds: {', '.join(WORLDS)}")
-    try:
-        entry_point = _ENTRY_POINTS[(tool, world)]
-    except KeyError:
-        tools = sorted({t for t, w in _ENTRY_POINTS if w == world})
-        raise InputError(f"unknown tool {tool!r} for world {world!r}; known tools: {', '.join(tools)}") from None
-    return _load(entry_point)(**kwargs)
+    check_world(world)
+    record = tool_record(tool)
+    if world not in record.scenes:
+        tools = sorted(name for name, scene_world in available_scenes() if scene_world == world)
+        raise InputError(f"unknown tool {tool!r} for world {world!r}; known tools: {', '.join(tools)}")
+    return load_entry_point(record.scenes[world])(**kwargs)
 
 
 def scripted_motion(tool: str, world: str, params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
     """The hand-made motion of ``tool`` that solves its scene in ``world`` with ``params``: (T, 3)
-    head positions (m) and (T, 3, 3) rotations, world frame, at ``fps``; InputError for a scene
-    without one."""
-    try:
-        entry_point = _SCRIPTED_MOTIONS[(tool, world)]
-    except KeyError:
-        known = ", ".join(f"{t}/{w}" for t, w in sorted(_SCRIPTED_MOTIONS))
-        raise NoScriptedMotion(f"no scripted motion for the {tool} in world {world!r}; scripted: {known}") from None
-    return _load(entry_point)(params, fps)
+    head positions (m) and (T, 3, 3) rotations, world frame, at ``fps``; NoScriptedMotion (an
+    InputError) for a scene without one."""
+    record = find_tool(tool)
+    entry_point = None if record is None else record.scripted_motions.get(world)
+    if entry_point is None:
+        scripted = sorted((r.name, w) for r in tool_records() for w in r.scripted_motions)
+        known = ", ".join(f"{t}/{w}" for t, w in scripted)
+        raise NoScriptedMotion(f"no scripted motion for the {tool} in world {world!r}; scripted: {known}")
+    return load_entry_point(entry_point)(params, fps)
 
 
-def _load(entry_point: str) -> Any:
-    """The object named by ``"module:name"``, its module imported only now."""
-    module_name, name = entry_point.split(":")
-    return getattr(importlib.import_module(module_name), name)
+def check_world(world: str) -> None:
+    """InputError unless ``world`` is one of :data:`WORLDS`."""
+    if world not in WORLDS:
+        raise InputError(f"unknown world {world!r}; known worlds: {', '.join(WORLDS)}")

@@ -339,15 +339,15 @@ class TrajectoryResult:
         text = json_text(document)
         with atomic_path(directory / TRAJECTORY_NPZ) as npz_tmp, atomic_path(directory / TRAJECTORY_JSON) as json_tmp:
             with open(npz_tmp, "wb") as handle:
-                np.savez(
-                    handle,
-                    q=self.q,
-                    v=self.v,
-                    base=self.base,
-                    joint_names=np.array(self.joint_names),
-                    dt=np.float64(self.dt),
+                arrays: dict[str, Any] = {
+                    "q": self.q,
+                    "v": self.v,
+                    "base": self.base,
+                    "joint_names": np.array(self.joint_names),
+                    "dt": np.float64(self.dt),
                     **({} if self.scene is None else self.scene.arrays()),
-                )
+                }
+                np.savez(handle, **arrays)
             json_tmp.write_text(text)
         return directory
 

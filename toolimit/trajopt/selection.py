@@ -133,12 +133,18 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
     candidates = [
         AlignedCandidate(
             targets=PoseTargets.from_quaternions(positions[k], quaternions[k], fps),
-            params={name: value[k] if np.ndim(value[k]) else float(value[k]) for name, value in params.items()},
+            params={name: _row(value, k) for name, value in params.items()},
             alignment_reward=float(rewards[k]),
         )
         for k in range(len(positions))
     ]
     return tool, world, candidates
+
+
+def _row(stacked: np.ndarray | float, k: int) -> np.ndarray | float:
+    """Candidate k's value of a parameter stacked over the candidates (a float when 0-d)."""
+    value = np.asarray(stacked)[k]
+    return value if value.ndim else float(value)
 
 
 def select_by_robot_execution(

@@ -1,20 +1,23 @@
 """What a 3D world looks like at one instant: boxes and spheres read from a scene snapshot.
 
 One neutral description shared by the meshcat views and the rerun recordings, so that both draw
-the same things. World frame: metres, z up, ground z = 0. ``world_elements(tool, snapshot)`` knows
-the ``snapshot()`` keys of each 3D world (instance 0 of ``SpatialSpadeScene``,
-``SpatialHammerScene``, ``SpatialScytheScene``).
+the same things. World frame: metres, z up, ground z = 0. ``world_elements(tool, snapshot)`` draws
+with the function the tool's record names (``ToolRecord.world_view``), which knows the
+``snapshot()`` keys of its 3D world: :func:`spade_elements`, :func:`hammer_elements`,
+:func:`scythe_elements` for instance 0 of ``SpatialSpadeScene``, ``SpatialHammerScene``,
+``SpatialScytheScene``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
-from toolimit.tools import rotation_z
+from toolimit.tools.frame import rotation_z
+from toolimit.tools.registry import find_tool, load_entry_point, tool_records
 
 #: Side of the square ground tile drawn under every world, m.
 GROUND_SIZE = 4.0
@@ -63,7 +66,7 @@ def _ground(center_xy: np.ndarray) -> Element:
     return _box("ground", [center_xy[0], center_xy[1], -0.005], half, (0.85, 0.85, 0.8, 1.0))
 
 
-def _hammer_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
+def hammer_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     """Board, nail head plate and shank."""
     steel = (0.45, 0.45, 0.5, 1.0)
     return [
@@ -78,7 +81,7 @@ def _hammer_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
 _FALLEN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
-def _scythe_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
+def scythe_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     """Patch and stalks; cut stalks lie on the ground (straw coloured)."""
     center, yaw = snapshot["patch_center"], float(snapshot["patch_yaw"])
     turn = rotation_z(yaw)
@@ -96,7 +99,7 @@ def _scythe_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     return elements
 
 
-def _spade_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
+def spade_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     """Deposit and goal-box walls, sand spheres."""
     elements = [_ground(snapshot["goal_position"][:2])]
     walls = zip(snapshot["wall_centers"], snapshot["wall_rotations"], snapshot["wall_half_extents"])
@@ -108,21 +111,16 @@ def _spade_elements(snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     return elements
 
 
-_WORLDS: dict[str, Callable[[Mapping[str, np.ndarray]], list[Element]]] = {
-    "hammer": _hammer_elements,
-    "scythe": _scythe_elements,
-    "spade": _spade_elements,
-}
-
-
 def world_elements(tool: str, snapshot: Mapping[str, np.ndarray]) -> list[Element]:
     """The drawn parts of the 3D world of ``tool`` in the state ``snapshot``.
 
     Raises ValueError for an unknown tool or a snapshot without a key the world needs.
     """
-    if tool not in _WORLDS:
-        raise ValueError(f"no 3D world view for tool {tool!r}; known: {', '.join(_WORLDS)}")
+    record = find_tool(tool)
+    if record is None or record.world_view is None:
+        known = ", ".join(r.name for r in tool_records() if r.world_view is not None)
+        raise ValueError(f"no 3D world view for tool {tool!r}; known: {known}")
     try:
-        return _WORLDS[tool](snapshot)
+        return load_entry_point(record.world_view)(snapshot)
     except KeyError as error:
         raise ValueError(f"{tool} snapshot lacks the key {error.args[0]!r}") from None

@@ -29,7 +29,8 @@ The shapes:
   plane); a snath capsule along z from the head point to 5 cm beyond the handle end (1.0 m).
 
 The working part is always the first box (``tool_boxes(name)[0]``): the spade blade plate, the
-hammer head, the scythe blade.
+hammer head, the scythe blade. Each tool's record names its builder (``ToolRecord.shapes``,
+:mod:`toolimit.tools.registry`): :func:`spade_shapes`, :func:`hammer_shapes`, :func:`scythe_shapes`.
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from toolimit.tools import tool_spec
+from toolimit.errors import InputError
+from toolimit.tools.registry import load_entry_point, tool_record, tool_spec
 
 #: The 3D spade blade (m): length along the tool axis from the tip, width across (tool y). The
 #: original scene's spade mesh has a blade of about 0.17 m x 0.12 m; of the two ways to read it,
@@ -158,7 +160,8 @@ def _capsule_along_z(name: str, z_start: float, z_end: float, radius: float, col
     )
 
 
-def _spade() -> tuple[list[OrientedBox], list[Capsule]]:
+def spade_shapes() -> tuple[list[OrientedBox], list[Capsule]]:
+    """The spade's boxes (the working part first) and capsules (see the module docstring)."""
     spec = tool_spec("spade")
     t, rim, w, blade = SPADE_PLATE_THICKNESS, SPADE_RIM_HEIGHT, SPADE_BLADE_WIDTH / 2, SPADE_BLADE_LENGTH
     boxes = [
@@ -173,7 +176,8 @@ def _spade() -> tuple[list[OrientedBox], list[Capsule]]:
     return boxes, capsules
 
 
-def _hammer() -> tuple[list[OrientedBox], list[Capsule]]:
+def hammer_shapes() -> tuple[list[OrientedBox], list[Capsule]]:
+    """The hammer's boxes (the working part first) and capsules (see the module docstring)."""
     spec = tool_spec("hammer")
     x, z, y = spec.head_width / 2, spec.head_length / 2, 0.015
     boxes = [_box("head", (-x, -y, -z), (x, y, z), "dark_steel")]
@@ -182,15 +186,13 @@ def _hammer() -> tuple[list[OrientedBox], list[Capsule]]:
     return boxes, capsules
 
 
-def _scythe() -> tuple[list[OrientedBox], list[Capsule]]:
+def scythe_shapes() -> tuple[list[OrientedBox], list[Capsule]]:
+    """The scythe's boxes (the working part first) and capsules (see the module docstring)."""
     spec = tool_spec("scythe")
     boxes = [_box("blade", (0.0, -0.002, 0.0), (spec.head_width, 0.002, spec.head_length), "steel")]
     r = SCYTHE_SNATH_RADIUS
     capsules = [_capsule_along_z("snath", 0.0, spec.length + 0.05 - r, r, "wood")]
     return boxes, capsules
-
-
-_BUILDERS = {"spade": _spade, "hammer": _hammer, "scythe": _scythe}
 
 
 def tool_boxes(tool: str) -> tuple[OrientedBox, ...]:
@@ -201,11 +203,14 @@ def tool_boxes(tool: str) -> tuple[OrientedBox, ...]:
 def tool_shapes(tool: str) -> ToolShapes:
     """Boxes, capsules, stacked arrays and the Pinocchio ``GeometryModel`` of ``tool``.
 
-    Raises ValueError for an unknown tool name. A new object each call (the GeometryModel is
-    mutable), cheap enough to call once per scene.
+    Raises ValueError (InputError) for an unknown tool name or a tool whose record names no
+    ``shapes``. A new object each call (the GeometryModel is mutable), cheap enough to call once
+    per scene.
     """
-    tool_spec(tool)  # clear error for an unknown name
-    boxes, capsules = _BUILDERS[tool]()
+    entry_point = tool_record(tool).shapes
+    if entry_point is None:
+        raise InputError(f"tool {tool!r} has no 3D shapes (its ToolRecord.shapes is None)")
+    boxes, capsules = load_entry_point(entry_point)()
     model = pin.GeometryModel()
     for box in boxes:
         obj = pin.GeometryObject(

@@ -1,4 +1,4 @@
-"""Tool definitions and the tool frame shared by scenes, robots and trajectory optimisation.
+"""The tool frame shared by scenes, robots and trajectory optimisation, and its maths.
 
 The tool frame (one convention for every tool, world and robot):
 
@@ -15,7 +15,6 @@ about the tool axis: ``R = R_swing(axis) @ Rz(alpha)``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -32,42 +31,6 @@ class ToolPose(NamedTuple):
 
     position: np.ndarray
     rotation: np.ndarray
-
-
-@dataclass(frozen=True)
-class ToolSpec:
-    """Dimensions of a tool, metres, in its tool frame.
-
-    Attributes:
-        name: registry name.
-        length: head point to handle end (where a robot flange holds it).
-        head_length: extent of the working part along the tool axis from the head point
-            (spade blade length, hammer head height, scythe blade root block).
-        head_width: extent of the working part across the tool (spade blade width, hammer head
-            length along its striking axis, scythe blade length along x).
-        roll_symmetric: True when a roll of pi about the tool axis gives an equivalent tool.
-    """
-
-    name: str
-    length: float
-    head_length: float
-    head_width: float
-    roll_symmetric: bool = False
-
-
-TOOLS: dict[str, ToolSpec] = {
-    "spade": ToolSpec("spade", length=0.40, head_length=0.22, head_width=0.20),
-    "hammer": ToolSpec("hammer", length=0.33, head_length=0.035, head_width=0.11, roll_symmetric=True),
-    "scythe": ToolSpec("scythe", length=1.0, head_length=0.05, head_width=0.45),
-}
-
-
-def tool_spec(name: str) -> ToolSpec:
-    """The tool called ``name``; a clear error for an unknown one."""
-    try:
-        return TOOLS[name]
-    except KeyError:
-        raise InputError(f"unknown tool {name!r}; known tools: {', '.join(sorted(TOOLS))}") from None
 
 
 def swing_rotation(axis: np.ndarray) -> np.ndarray:
