@@ -73,7 +73,10 @@ def test_a_trajectory_paired_with_another_alignment_is_refused_in_one_line(
     with pytest.raises(TaskFileError, match="of another alignment"):
         task_from_pipeline(other, out / "trajectory")
     learned = tmp_path / "learned"
-    assert toolimit(["learn", "--alignment", str(other), "--trajectory", str(out / "trajectory"), "--out", str(learned)]) == 2
+    assert (
+        toolimit(["learn", "--alignment", str(other), "--trajectory", str(out / "trajectory"), "--out", str(learned)])
+        == 2
+    )
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and "another alignment" in error
     assert not learned.exists()
@@ -85,7 +88,7 @@ def test_a_trajectory_tracked_from_poses_records_no_scene(stages, tmp_path: Path
     assert scene is not None
     targets = kept.candidates[scene.candidate].targets
     settings = dataclasses.replace(QUICK.trajopt, init="hold")
-    trajopt_from_poses(targets, "planar3", "spade", tmp_path / "poses_trajectory", settings, progress=False)
+    trajopt_from_poses(targets, "planar3", "spade", tmp_path / "poses_trajectory", settings=settings, progress=False)
     assert TrajectoryResult.load(tmp_path / "poses_trajectory").scene is None
     with pytest.raises(TaskFileError, match="records no scene"):
         task_from_pipeline(out / "alignment", tmp_path / "poses_trajectory")
@@ -119,8 +122,21 @@ def test_the_readmes_python_chain_gives_what_toolimit_run_gives(
     namespace: dict[str, object] = {}
     exec(compile(block, "README.md", "exec"), namespace)
     from_python = namespace["evaluation"].record  # type: ignore[attr-defined]
-    command = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo", str(DEMO),
-               "--out", str(tmp_path / "command"), "--quick", "--quiet"]
+    command = [
+        "run",
+        "--tool",
+        "spade",
+        "--robot",
+        "planar3",
+        "--world",
+        "planar",
+        "--demo",
+        str(DEMO),
+        "--out",
+        str(tmp_path / "command"),
+        "--quick",
+        "--quiet",
+    ]
     assert toolimit(command) == 0
     from_command = json.loads((tmp_path / "command" / "evaluation.json").read_text())
     assert from_python["success_rate"] == from_command["success_rate"]

@@ -37,8 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "align",
         help="align a scene to a demonstration (stage ii)",
-        description="Find scene parameters under which a demonstration reaches the goal (stage ii): "
-        "writes OUT/alignment.json and OUT/aligned_demo.npz. Exit code 1 when no candidate is found.",
+        description=__doc__.splitlines()[0],
     )
     add_scene_arguments(parser, "planar")
     parser.add_argument(

@@ -110,7 +110,9 @@ def run(args: argparse.Namespace) -> int:
                 print(line)
         else:
             targets = load_poses(args.poses, args.frame)
-            result = trajopt_from_poses(targets, args.robot, args.tool, args.out, settings, not args.quiet)
+            result = trajopt_from_poses(
+                targets, args.robot, args.tool, args.out, settings=settings, progress=not args.quiet
+            )
             print(f"{args.robot}: {result.describe()}")
     for warning in caught:
         print(f"note: {warning.message}", file=sys.stderr)

@@ -176,6 +176,7 @@ def trajopt_from_poses(
     robot: str,
     tool: str,
     out: str | Path,
+    *,
     settings: TrajoptSettings = TrajoptSettings(),
     progress: bool = True,
 ) -> TrajectoryResult:
