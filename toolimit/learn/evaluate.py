@@ -22,6 +22,9 @@ from toolimit.learn.task import LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 from toolimit.trajopt.result import TRAJECTORY_NPZ
 
+#: Seed of the evaluation episodes by default: apart from the training seeds (0, 1, 2, ...).
+EVALUATION_SEED = 1000
+
 
 @dataclass(frozen=True)
 class Evaluation:
@@ -58,7 +61,7 @@ def evaluate(
     task: LearningTask,
     episodes: int = 20,
     deterministic: bool = True,
-    seed: int = 1000,
+    seed: int = EVALUATION_SEED,
     scene_kwargs: dict[str, Any] | None = None,
 ) -> Evaluation:
     """Roll ``model``'s policy out for ``episodes`` episodes of ``task`` (one batch, seeded)."""

@@ -24,7 +24,7 @@ import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.learn.adr import GOAL_BOX, HALF_RANGE, goal_box_spec
-from toolimit.learn.evaluate import observes_goal_box
+from toolimit.learn.evaluate import EVALUATION_SEED, observes_goal_box
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
 from toolimit.robots import RobotModel
@@ -119,7 +119,7 @@ def goal_box_heat_map(
     task: LearningTask,
     grid: int = 9,
     episodes: int = 1,
-    seed: int = 1000,
+    seed: int = EVALUATION_SEED,
     scene_kwargs: dict[str, Any] | None = None,
     batch_size: int = 32,
 ) -> HeatMap:

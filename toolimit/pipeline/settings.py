@@ -20,6 +20,7 @@ from toolimit.align.config import AlignmentConfig
 from toolimit.deploy.export import DEFAULT_RATE_HZ
 from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
 from toolimit.errors import InvalidSetting
+from toolimit.learn.evaluate import EVALUATION_SEED
 from toolimit.learn.training import LearningConfig
 from toolimit.trajopt.problem import TrackingWeights
 from toolimit.trajopt.time_scale import TIME_SCALE_GRID
@@ -120,11 +121,11 @@ class EvaluationSettings:
 
     Attributes:
         episodes: rollouts per mode (deterministic and stochastic).
-        seed: seed of the evaluation episodes (1000: apart from the training seeds).
+        seed: seed of the evaluation episodes (apart from the training seeds).
     """
 
     episodes: int = 20
-    seed: int = 1000
+    seed: int = EVALUATION_SEED
 
     def __post_init__(self) -> None:
         _check_integer("episodes", self.episodes, 1)
@@ -177,8 +178,8 @@ class PipelineSettings:
         return with_values(cls(), {**WORLD_PRESETS[world], **(QUICK if quick else {})})
 
     def with_seed(self, seed: int) -> PipelineSettings:
-        """The same settings with every stage seeded by ``seed`` (the evaluation at ``seed`` + 1000,
-        apart from the training seeds)."""
+        """The same settings with every stage seeded by ``seed`` (the evaluation at ``seed`` +
+        :data:`~toolimit.learn.evaluate.EVALUATION_SEED`, apart from the training seeds)."""
         return with_values(
             self,
             {

@@ -94,9 +94,9 @@ class TrackOptions:
 def base_guesses(
     robot: RobotModel,
     targets: PoseTargets,
-    count: int = 8,
-    radius: float = 0.6,
-    ring: int = 8,
+    count: int = TrackOptions.starts,
+    radius: float = TrackOptions.start_radius,
+    ring: int = TrackOptions.ring_starts,
     rng: np.random.Generator | None = None,
     q_start: np.ndarray | None = None,
 ) -> np.ndarray:

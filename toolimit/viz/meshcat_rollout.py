@@ -21,6 +21,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from toolimit.learn.evaluate import EVALUATION_SEED
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
 from toolimit.robots import make_robot
@@ -55,7 +56,7 @@ def record_rollout(
     task: LearningTask,
     policy: Policy | None = None,
     deterministic: bool = True,
-    seed: int = 1000,
+    seed: int = EVALUATION_SEED,
     scene_kwargs: dict[str, Any] | None = None,
 ) -> Rollout:
     """Run one episode of ``task`` with ``policy`` (its mean if ``deterministic``), or with the
