@@ -110,8 +110,18 @@ def _readme_python_block() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
+@pytest.fixture(scope="module")
+def command_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], Path]:
+    """``toolimit run --quick`` on the planar spade: (its arguments, its folder)."""
+    out = tmp_path_factory.mktemp("command")
+    argv = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo", str(DEMO),
+            "--out", str(out), "--quick", "--quiet"]
+    assert toolimit(argv) == 0
+    return argv, out
+
+
 def test_the_readmes_python_chain_gives_what_toolimit_run_gives(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    command_run, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """README's block, on quick budgets, against ``toolimit run --quick`` with the same seed."""
     block = _readme_python_block()
@@ -122,23 +132,24 @@ def test_the_readmes_python_chain_gives_what_toolimit_run_gives(
     namespace: dict[str, object] = {}
     exec(compile(block, "README.md", "exec"), namespace)
     from_python = namespace["evaluation"].record  # type: ignore[attr-defined]
-    command = [
-        "run",
-        "--tool",
-        "spade",
-        "--robot",
-        "planar3",
-        "--world",
-        "planar",
-        "--demo",
-        str(DEMO),
-        "--out",
-        str(tmp_path / "command"),
-        "--quick",
-        "--quiet",
-    ]
-    assert toolimit(command) == 0
-    from_command = json.loads((tmp_path / "command" / "evaluation.json").read_text())
+    from_command = json.loads((command_run[1] / "evaluation.json").read_text())
     assert from_python["success_rate"] == from_command["success_rate"]
     np.testing.assert_allclose(from_python["goal_reward"], from_command["goal_reward"], rtol=1e-6, atol=1e-6)
     assert "candidate" in capsys.readouterr().out
+
+
+def test_the_command_writes_every_stage_resumes_and_refuses_another_robot(
+    command_run, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv, out = command_run
+    evaluation = json.loads((out / "evaluation.json").read_text())
+    assert {"success_rate", "goal_reward_mean", "episodes", "env_steps", "wall_time_s"} <= set(evaluation)
+    assert evaluation["env_steps"] > 0 and evaluation["episodes"] == 4
+    assert (out / "policy_rollout" / "trajectory.npz").is_file()
+    assert toolimit(argv) == 0
+    said = capsys.readouterr().out
+    assert said.count("done earlier") == 3 and "[export] skipped: the planar3 has no published" in said
+    other = [*argv[:4], "panda", *argv[5:]]
+    assert toolimit(other) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "holds a finished stage for robot 'planar3', not 'panda'" in error

@@ -70,20 +70,3 @@ def test_learn_from_a_missing_stage_output(tmp_path, capsys):
     assert main(["learn", "--alignment", str(tmp_path / "alignment"), "--trajectory", str(tmp_path / "trajectory"),
                  "--out", str(tmp_path / "out"), *TINY]) == 2
     assert "trajectory.npz: no such file" in _error_line(capsys)
-
-
-def test_run_quick_resumes_and_refuses_another_robot(tmp_path, repo_root, capsys):
-    """The planar pipeline on --quick budgets; a second call skips every finished stage."""
-    argv = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo",
-            str(repo_root / "data" / "demos" / "spade_03.npz"), "--out", str(tmp_path), "--quick", "--quiet"]
-    assert main([*argv, "--timesteps", "0"]) == 0
-    evaluation = json.loads((tmp_path / "evaluation.json").read_text())
-    assert {"success_rate", "goal_reward_mean", "episodes", "env_steps", "wall_time_s"} <= set(evaluation)
-    assert evaluation["env_steps"] > 0 and evaluation["episodes"] == 4
-    assert (tmp_path / "policy_rollout" / "trajectory.npz").is_file()
-    assert "[export] skipped: the planar3 has no published" in capsys.readouterr().out
-    assert main([*argv, "--timesteps", "0"]) == 0
-    assert capsys.readouterr().out.count("done earlier") == 3
-    other = [*argv[:4], "panda", *argv[5:]]
-    assert main(other) == 2
-    assert "holds a finished stage for robot 'planar3', not 'panda'" in _error_line(capsys)

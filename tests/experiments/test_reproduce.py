@@ -99,7 +99,7 @@ def test_a_robot_that_cannot_track_the_scripted_motion_leaves_the_lfd_cell_missi
     def refuse(*args, **kwargs):
         raise BaseInsideFootprint("every one of the 4 solutions puts the robot base inside a scene element")
 
-    monkeypatch.setattr("toolimit.learn.kinesthetic.kinesthetic_task", refuse)
+    monkeypatch.setattr("toolimit.experiments.reproduce.kinesthetic_task", refuse)
     monkeypatch.chdir(REPO)
     assert toolimit(["reproduce", "--preset", "quick", "--out", str(out), "--quiet"]) == 1
     said = [line for line in capsys.readouterr().out.splitlines() if "lfd:" in line]
