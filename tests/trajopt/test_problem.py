@@ -88,7 +88,8 @@ def test_cost_is_the_benchmark_objective(panda):
     path = reachable_path(panda, 5)
     base = np.array([0.0, 0.1, -0.2])
     targets = targets_of(panda, path, base + [0.05, 0.0, 0.0])
-    problem = TrackingProblem(panda, targets, 0.05, q_start=path[0])
+    benchmark = TrackingWeights(position=1.0, rotation=0.5, velocity=0.01)  # PROBLEM.md's weights
+    problem = TrackingProblem(panda, targets, 0.05, q_start=path[0], weights=benchmark)
     terms = problem.cost_terms(base, path)
     pose = 0.0
     for t in range(5):
