@@ -4,7 +4,7 @@ Under ADR (``adr=True`` of :class:`~toolimit.learn.simulator.TaskSimulator`, ``t
 --adr``) every reset places each instance's goal box at an (x, y) drawn uniformly inside the
 current bounds (:class:`AdrBounds`, world frame, m), and the policy observes it. The bounds start at
 the aligned position (the task's) and move by the rule of the authors' code
-(``../shared/reference/AUTHORS_SETUP.md``), run by :class:`AdrCallback` during PPO:
+(``docs/original_setup.md#adr``), run by :class:`AdrCallback` during PPO:
 
 * every ``every`` updates, one coordinate and one of its two bounds are picked at random (from the
   seeded generator of :class:`AdrState`, saved in checkpoints so that a resume is exact), and one
