@@ -226,7 +226,7 @@ class Forbidden:
     """What one exercise may not use: modules (by name and file), objects, code objects."""
 
     def __init__(self, names: Iterable[str], own_file: Path) -> None:
-        own = own_file.resolve()
+        own = self.own = own_file.resolve()
         self.names: dict[str, str] = {}  # module name or object name -> how the message calls it
         self.files: dict[Path, str] = {}  # a forbidden file or folder -> its description
         self.objects: dict[int, str] = {}
@@ -403,6 +403,8 @@ class _Stop(BaseException):
 
 class Guard:
     """Within ``with Guard(forbidden):``, starting a forbidden function records it and raises.
+    Imports are let through (a forbidden module may be imported by an allowed one; its functions
+    are still watched when they run afterwards).
 
     ``violation`` names the first forbidden function that started; ``tampered`` is True when the
     code inside replaced the profiler (so nothing could be watched after that)."""
@@ -412,11 +414,21 @@ class Guard:
         self.violation: str | None = None
         self.tampered = False
         self._checked = forbidden.call_cache
+        self._imports: list[types.FrameType] = []  # module bodies running (imports under way)
 
     def _profile(self, frame: types.FrameType, event: str, arg: Any) -> None:
+        if event == "return":
+            if self._imports and frame is self._imports[-1]:
+                self._imports.pop()
+            return
         if event != "call":
             return
         code = frame.f_code
+        if code.co_name == "<module>" and self._is_import(frame):
+            self._imports.append(frame)  # importing a module is not calling its functions
+            return
+        if self._imports:
+            return
         if code not in self._checked:
             self._checked[code] = self.forbidden.codes.get(code) or self.forbidden.file_verdict(code.co_filename)
         verdict = self._checked[code]
@@ -425,6 +437,14 @@ class Guard:
                 what = "imported" if code.co_name == "<module>" else f"{code.co_name}() ran"
                 self.violation = f"{verdict} ({what} while your code ran)"
             raise _Stop(self.violation)
+
+    def _is_import(self, frame: types.FrameType) -> bool:
+        """True when the frame runs the body of a module being imported from its file (not code
+        handed to ``exec``, not the submission itself)."""
+        origin = getattr(frame.f_globals.get("__spec__"), "origin", None)
+        return (
+            origin is not None and origin == frame.f_code.co_filename and Path(origin).resolve() != self.forbidden.own
+        )
 
     def __enter__(self) -> Guard:
         self._previous = sys.getprofile()

@@ -25,6 +25,8 @@ CHEATING = Path(__file__).resolve().parent / "cheating_solutions"
 EXERCISES = sorted(path.stem for path in (COURSE / "exercises").glob("ex*.py"))
 VARIANTS = sorted(path.name for path in WRONG.iterdir() if path.is_dir() and path.name.startswith("ex"))
 CHEATS = sorted(path.name for path in CHEATING.iterdir() if path.is_dir() and path.name.startswith("ex"))
+HONEST = Path(__file__).resolve().parent / "honest_solutions"
+HONEST_VARIANTS = sorted(path.name for path in HONEST.iterdir() if path.is_dir() and path.name.startswith("ex"))
 #: A loop the grader's per-call time limit cannot interrupt (it swallows every exception): only the
 #: per-exercise timeout of grade.py stops it.
 STUBBORN_LOOP = """import time
@@ -98,6 +100,9 @@ def grades(tmp_path_factory) -> dict:
         for variant in CHEATS:
             if wrong_solution_file(variant, CHEATING).stem == exercise:
                 (wrong / variant).symlink_to(CHEATING / variant)
+        for variant in HONEST_VARIANTS:
+            if wrong_solution_file(variant, HONEST).stem == exercise:
+                (wrong / variant).symlink_to(HONEST / variant)
         runs.append((wrong, ("--exercise", exercise)))
     loops = folder / "loops"
     for name, source in (("loops_stubbornly", STUBBORN_LOOP), ("loops_plainly", PLAIN_LOOP)):
@@ -179,6 +184,13 @@ def test_cheating_solution_scores_zero_with_a_message(grades, variant):
     assert result["status"] == "forbidden" and result["passed"] == 0, (result["status"], result["tests"])
     forbidden = [message for message in result["messages"].values() if message.startswith("0 points for this exercise")]
     assert forbidden and "existing implementation" in forbidden[0], result["messages"]
+
+
+@pytest.mark.parametrize("variant", HONEST_VARIANTS)
+def test_honest_solution_using_other_toolimit_names_is_not_refused(grades, variant):
+    exercise = wrong_solution_file(variant, HONEST).stem
+    result = grades[variant][exercise]
+    assert result["status"] == "graded" and result["passed"] == result["total"], result["messages"]
 
 
 def test_untouched_stub_is_one_line_not_attempted(grades):
