@@ -108,7 +108,9 @@ def grades(tmp_path_factory) -> dict:
     for name, source in (("loops_stubbornly", STUBBORN_LOOP), ("loops_plainly", PLAIN_LOOP)):
         (loops / name).mkdir(parents=True)
         (loops / name / "ex01_velocity_keypoints.py").write_text(source)
-        (loops / name / "ex02_element_sampling.py").symlink_to(COURSE / "solutions" / "ex02_element_sampling.py")
+    (loops / "loops_stubbornly" / "ex02_element_sampling.py").symlink_to(
+        COURSE / "solutions" / "ex02_element_sampling.py"
+    )
     runs.append((loops, ("--exercise", "ex01", "--exercise", "ex02", "--timeout", "15", "--call-timeout", "3")))
     graded: dict = {}
     for submissions, selection in runs:
@@ -212,9 +214,8 @@ def test_an_endless_loop_costs_only_its_exercise(grades):
     plain = grades["loops_plainly"]["ex01_velocity_keypoints"]
     assert plain["status"] == "graded" and plain["passed"] == 0, plain
     assert plain["seconds"] < 15 and "did not return within 3 s" in next(iter(plain["messages"].values()))
-    for student in ("loops_stubbornly", "loops_plainly"):
-        other = grades[student]["ex02_element_sampling"]
-        assert other["status"] == "graded" and other["passed"] == other["total"] > 0, other["messages"]
+    other = stubborn["ex02_element_sampling"]
+    assert other["status"] == "graded" and other["passed"] == other["total"] > 0, other["messages"]
 
 
 def test_messages_are_plain_sentences(grades):
