@@ -26,6 +26,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import numpy as np
 import pytest
 from grading import (
     CallTimer,
@@ -100,7 +101,7 @@ class StudentModule:
             guard, timer, error = Guard(self._forbidden), CallTimer(self._time_limit), None
             try:
                 with guard, timer:
-                    result = value(*args, **kwargs)
+                    result = materialised(value(*args, **kwargs))
             except (Exception, _Stop) as raised:
                 error = raised
             if guard.violation or guard.tampered:
@@ -121,6 +122,23 @@ class StudentModule:
             return result
 
         return call
+
+
+def materialised(result: Any) -> Any:
+    """The result with lazy parts computed now, under the guard: an iterator becomes a list, an
+    object that only converts to an array (``__array__``) becomes the array; tuples and lists
+    element by element. Arrays, tensors, numbers and None are returned as they are."""
+    if isinstance(result, (tuple, list)):
+        return type(result)(materialised(item) for item in result)
+    if result is None or isinstance(result, (np.ndarray, np.generic, int, float, complex, bool, str)):
+        return result
+    if type(result).__module__.split(".")[0] == "torch":
+        return result
+    if hasattr(result, "__next__"):
+        return [materialised(item) for item in result]
+    if hasattr(result, "__array__"):
+        return np.asarray(result)
+    return result
 
 
 def call_time_limit(grader: ModuleType | None) -> float:

@@ -264,7 +264,10 @@ class Forbidden:
                     path = path.resolve()
                     if path != own and path.name not in ("conftest.py", "grading.py"):
                         self.files[path] = what
-                        self.names[path.stem] = what
+                        if folder == GRADERS:  # importable by name while grading (its folder is on sys.path)
+                            self.names[path.stem] = what
+        for name in ("grading", "conftest"):  # the grader's own machinery: never part of an answer
+            self.names[name] = "the course's grading code"
         for name in UNWATCHABLE:
             self.names[name] = f"{name} (code run there is invisible to the grader)"
         self._file_cache: dict[str, str | None] = {}
