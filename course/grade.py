@@ -102,7 +102,10 @@ def grade_exercise(
             output, _ = process.communicate(timeout=timeout_s)
             timed_out = False
         except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
+            if hasattr(os, "killpg"):
+                os.killpg(process.pid, signal.SIGKILL)
+            else:  # Windows: no process groups here
+                process.kill()
             output, _ = process.communicate()
             timed_out = True
         records = read_report(report)
