@@ -21,7 +21,8 @@ def generalized_advantage_estimation(
     gae_lambda: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return ``(advantages, returns)`` of a rollout, both (T, E), exactly as stable-baselines3's
-    ``RolloutBuffer.compute_returns_and_advantage`` computes them.
+    ``RolloutBuffer.compute_returns_and_advantage`` computes them (write the recursion yourself:
+    calling that method scores 0).
 
     The rollout has T steps of E environments. At step t, environment e observed a state of value
     ``values[t, e]``, acted and received ``rewards[t, e]``. ``episode_starts[t, e]`` is 1.0 when the

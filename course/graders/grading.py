@@ -363,13 +363,16 @@ def static_violations(source: str, forbidden: Forbidden) -> list[str]:
         aliases.setdefault(builtin, f"builtins.{builtin}")
     problems: list[str] = []
     seen: set[tuple[str, int]] = set()
+    # a method name the student defines (class Buffer: def compute_returns_and_advantage) is theirs
+    own = {node.name for node in ast.walk(tree) if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))}
+    method_names = {name: what for name, what in forbidden.attributes.items() if name not in own}
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute):
             dotted = _dotted(node, aliases)
             if dotted:
                 references.append((dotted, node.lineno))
-            if node.attr in forbidden.attributes:
-                problems.append(f"{forbidden.attributes[node.attr]} (line {node.lineno}, .{node.attr})")
+            if node.attr in method_names:
+                problems.append(f"{method_names[node.attr]} (line {node.lineno}, .{node.attr})")
         elif isinstance(node, ast.Call) and node.args:
             function = _dotted(node.func, aliases) if isinstance(node.func, ast.Attribute) else None
             if isinstance(node.func, ast.Name):
@@ -385,8 +388,8 @@ def static_violations(source: str, forbidden: Forbidden) -> list[str]:
                 )
                 if base:
                     references.append((f"{base}.{strings[0]}", node.lineno))
-                if strings[0] in forbidden.attributes:
-                    problems.append(f"{forbidden.attributes[strings[0]]} (line {node.lineno}, getattr)")
+                if strings[0] in method_names:
+                    problems.append(f"{method_names[strings[0]]} (line {node.lineno}, getattr)")
     for dotted, line in references:
         found, target = _lookup(dotted)
         verdict = forbidden.object_verdict(target) if found else None
