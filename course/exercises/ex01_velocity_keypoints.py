@@ -1,6 +1,9 @@
 """Exercise 01: the velocity keypoints of a demonstration (stage ii of the method).
 
-Grade yourself with ``pytest course/graders -k ex01`` from the repository root.
+Check your work with ``python grade.py check --exercise ex01`` in the course folder (in the
+project's repository: ``python course/grade.py check --exercise ex01``); see README.md. Write the
+function yourself: a submission that calls an existing implementation of it (toolimit's, a
+dependency's, the course's) scores 0 for the exercise.
 """
 
 from __future__ import annotations

@@ -1,6 +1,9 @@
 """Exercise 02: placing scene elements around the keypoints (stage ii of the method).
 
-Grade yourself with ``pytest course/graders -k ex02`` from the repository root.
+Check your work with ``python grade.py check --exercise ex02`` in the course folder (in the
+project's repository: ``python course/grade.py check --exercise ex02``); see README.md. Write the
+function yourself: a submission that calls an existing implementation of it (toolimit's, a
+dependency's, the course's) scores 0 for the exercise.
 """
 
 from __future__ import annotations

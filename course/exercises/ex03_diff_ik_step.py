@@ -3,7 +3,10 @@
 Trajectory optimisation (``toolimit.trajopt``) solves one large QP over the whole horizon; here you
 write the one-step version that a reactive controller would run at every control tick.
 
-Grade yourself with ``pytest course/graders -k ex03`` from the repository root.
+Check your work with ``python grade.py check --exercise ex03`` in the course folder (in the
+project's repository: ``python course/grade.py check --exercise ex03``); see README.md. Write the
+function yourself: a submission that calls an existing implementation of it (toolimit's, a
+dependency's, the course's) scores 0 for the exercise.
 """
 
 from __future__ import annotations

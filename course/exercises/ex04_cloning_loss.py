@@ -1,6 +1,9 @@
 """Exercise 04: the behaviour-cloning loss on PPO's own policy (stage iv of the method).
 
-Grade yourself with ``pytest course/graders -k ex04`` from the repository root.
+Check your work with ``python grade.py check --exercise ex04`` in the course folder (in the
+project's repository: ``python course/grade.py check --exercise ex04``); see README.md. Write the
+function yourself: a submission that calls an existing implementation of it (toolimit's, a
+dependency's, the course's) scores 0 for the exercise.
 """
 
 from __future__ import annotations
@@ -22,9 +25,10 @@ def cloning_loss(policy: ActorCriticPolicy, observations: torch.Tensor, expert_a
     * the standard deviation is set on purpose (the paper's authors fixed it at 0.2 rad/s; a learned
       one collapsed), so the loss must not depend on ``policy.log_std``.
 
-    The mean is ``policy.get_distribution(observations).distribution.mean``, or step by step:
-    ``features = policy.extract_features(observations, policy.pi_features_extractor)``, then
-    ``policy.action_net(policy.mlp_extractor.forward_actor(features))``.
+    Hints: ``ActorCriticPolicy`` has a method that gives the action distribution for a batch of
+    observations, and SB3's ``DiagGaussianDistribution`` wraps a ``torch.distributions.Normal``
+    (``help(ActorCriticPolicy)`` or their source tell you more). The loss must let gradients reach
+    the actor network and none reach ``policy.log_std``; ``torch.nn.functional`` has the usual losses.
 
     Args:
         policy: an SB3 ``ActorCriticPolicy`` with a Gaussian (``DiagGaussianDistribution``) head.

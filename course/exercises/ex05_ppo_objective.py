@@ -1,6 +1,9 @@
 """Exercise 05: PPO's two computations, generalised advantage estimation and the clipped surrogate.
 
-Grade yourself with ``pytest course/graders -k ex05`` from the repository root.
+Check your work with ``python grade.py check --exercise ex05`` in the course folder (in the
+project's repository: ``python course/grade.py check --exercise ex05``); see README.md. Write the
+function yourself: a submission that calls an existing implementation of it (toolimit's, a
+dependency's, the course's) scores 0 for the exercise.
 """
 
 from __future__ import annotations
@@ -8,11 +11,18 @@ from __future__ import annotations
 import numpy as np
 
 
-def generalized_advantage_estimation(rewards: np.ndarray, values: np.ndarray, episode_starts: np.ndarray,
-                                     last_values: np.ndarray, dones: np.ndarray, gamma: float,
-                                     gae_lambda: float) -> tuple[np.ndarray, np.ndarray]:
+def generalized_advantage_estimation(
+    rewards: np.ndarray,
+    values: np.ndarray,
+    episode_starts: np.ndarray,
+    last_values: np.ndarray,
+    dones: np.ndarray,
+    gamma: float,
+    gae_lambda: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """Return ``(advantages, returns)`` of a rollout, both (T, E), exactly as stable-baselines3's
-    ``RolloutBuffer.compute_returns_and_advantage`` computes them.
+    ``RolloutBuffer.compute_returns_and_advantage`` computes them (write the recursion yourself:
+    calling that method scores 0).
 
     The rollout has T steps of E environments. At step t, environment e observed a state of value
     ``values[t, e]``, acted and received ``rewards[t, e]``. ``episode_starts[t, e]`` is 1.0 when the
@@ -36,8 +46,9 @@ def generalized_advantage_estimation(rewards: np.ndarray, values: np.ndarray, ep
     raise NotImplementedError("exercise 05: generalised advantage estimation")
 
 
-def clipped_surrogate_loss(log_prob_new: np.ndarray, log_prob_old: np.ndarray, advantages: np.ndarray,
-                           clip_range: float) -> float:
+def clipped_surrogate_loss(
+    log_prob_new: np.ndarray, log_prob_old: np.ndarray, advantages: np.ndarray, clip_range: float
+) -> float:
     """Return PPO's clipped policy loss (to be minimised), as stable-baselines3's PPO computes it.
 
     With ratio = exp(log_prob_new - log_prob_old), the loss is

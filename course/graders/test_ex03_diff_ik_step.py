@@ -14,10 +14,14 @@ import osqp
 import pinocchio as pin
 import pytest
 import scipy.sparse as sp
+from grading import check, fmt, fmt_shape
 
 from toolimit.robots import RobotModel, make_robot
 
 MODULE = "ex03_diff_ik_step"
+#: Existing implementations of this exercise (the library's trajectory optimisation solves the same
+#: QP over a horizon): a submission calling one of them gets 0 (grading.py).
+FORBIDDEN = ["toolimit.trajopt", "toolimit.compare"]
 VELOCITY_TOLERANCE = 1e-4  # rad/s between your answer and the expected one
 CONSTRAINT_TOLERANCE = 1e-6  # rad/s (velocity limits) and rad (position limits)
 
@@ -41,8 +45,15 @@ class Case:
     base: np.ndarray
 
     def call(self, function):
-        return function(self.q.copy(), self.target_position.copy(), self.target_rotation.copy(), self.dt,
-                        self.pose_weights.copy(), self.velocity_weight, self.base.copy())
+        return function(
+            self.q.copy(),
+            self.target_position.copy(),
+            self.target_rotation.copy(),
+            self.dt,
+            self.pose_weights.copy(),
+            self.velocity_weight,
+            self.base.copy(),
+        )
 
 
 def make_case(robot: RobotModel, seed: int, kind: str) -> Case:
@@ -70,8 +81,7 @@ def make_case(robot: RobotModel, seed: int, kind: str) -> Case:
     else:
         raise ValueError(kind)
     position, rotation = robot.tool_pose(q_target, base)
-    description = (f"seed {seed}, {kind} case, dt {dt:.3f} s, w_v {velocity_weight:.2e}, "
-                   f"W {pose_weights.round(3).tolist()}")
+    description = f"seed {seed}, {kind} case, dt {dt:.3f} s, w_v {velocity_weight:.3g}, W {fmt(pose_weights, 3)}"
     return Case(description, q, position, rotation, dt, pose_weights, velocity_weight, base)
 
 
@@ -93,8 +103,18 @@ def expected_velocity(robot: RobotModel, case: Case) -> np.ndarray:
     gradient = -2.0 * weighted.T @ (case.pose_weights * error)
     lower, upper = bounds(robot, case)
     solver = osqp.OSQP()
-    solver.setup(hessian, gradient, sp.identity(n, format="csc"), lower, upper, eps_abs=1e-10, eps_rel=1e-10,
-                 polishing=True, verbose=False, max_iter=200000)
+    solver.setup(
+        hessian,
+        gradient,
+        sp.identity(n, format="csc"),
+        lower,
+        upper,
+        eps_abs=1e-10,
+        eps_rel=1e-10,
+        polishing=True,
+        verbose=False,
+        max_iter=200000,
+    )
     result = solver.solve(raise_error=False)
     assert result.info.status_val == osqp.SolverStatus.OSQP_SOLVED, f"grader's QP failed: {result.info.status}"
     return np.clip(result.x, lower, upper)
@@ -103,17 +123,25 @@ def expected_velocity(robot: RobotModel, case: Case) -> np.ndarray:
 def binding_constraints(robot: RobotModel, case: Case, v: np.ndarray) -> str:
     velocity = [robot.joint_names[j] for j in range(len(v)) if abs(abs(v[j]) - robot.velocity_limit[j]) < 1e-6]
     q_next = case.q + v * case.dt
-    position = [robot.joint_names[j] for j in range(len(v))
-                if min(q_next[j] - robot.lower[j], robot.upper[j] - q_next[j]) < 1e-6]
-    return (f"in the expected answer, joints at their velocity limit: {velocity or 'none'}; "
-            f"at a position limit after the step: {position or 'none'}")
+    position = [
+        robot.joint_names[j]
+        for j in range(len(v))
+        if min(q_next[j] - robot.lower[j], robot.upper[j] - q_next[j]) < 1e-6
+    ]
+    return (
+        f"in the expected answer, joints at their velocity limit: {velocity or 'none'}; "
+        f"at a position limit after the step: {position or 'none'}"
+    )
 
 
 def student_velocity(submission, robot: RobotModel, case: Case) -> np.ndarray:
-    got = case.call(lambda *args: submission(MODULE).diff_ik_step(robot, *args))
-    got = np.asarray(got, dtype=float)
-    assert got.shape == (robot.n_joints,), f"{case.description}: expected shape ({robot.n_joints},), got {got.shape}"
-    assert np.all(np.isfinite(got)), f"{case.description}: your velocity has non-finite entries: {got}"
+    answer = case.call(lambda *args: submission(MODULE).diff_ik_step(robot, *args))
+    got = np.asarray(answer, dtype=float)
+    check(
+        got.shape == (robot.n_joints,),
+        f"{case.description}: expected shape ({robot.n_joints},), got {fmt_shape(answer)}",
+    )
+    check(np.all(np.isfinite(got)), f"{case.description}: your velocity has non-finite entries: {fmt(got)} rad/s")
     return got
 
 
@@ -122,11 +150,14 @@ def check_against_reference(submission, robot: RobotModel, case: Case) -> None:
     got = student_velocity(submission, robot, case)
     gap = np.abs(got - expected)
     worst = int(np.argmax(gap))
-    assert gap.max() <= VELOCITY_TOLERANCE, (
-        f"{case.description}:\n  expected v = {np.round(expected, 5).tolist()} rad/s\n"
-        f"  you gave  v = {np.round(got, 5).tolist()} rad/s\n"
-        f"  largest gap {gap[worst]:.3g} rad/s at {robot.joint_names[worst]};\n"
-        f"  {binding_constraints(robot, case, expected)}"
+    check(
+        gap.max() <= VELOCITY_TOLERANCE,
+        lambda: (
+            f"{case.description}, q = {fmt(case.q, 4)} rad:\n  expected v = {fmt(expected)} rad/s\n"
+            f"  you gave  v = {fmt(got)} rad/s\n"
+            f"  largest gap {gap[worst]:.3g} rad/s at {robot.joint_names[worst]};\n"
+            f"  {binding_constraints(robot, case, expected)}"
+        ),
     )
 
 
@@ -152,14 +183,21 @@ def test_ex03_respects_the_limits(submission, panda, kind):
         case = make_case(panda, seed, kind)
         got = student_velocity(submission, panda, case)
         excess = np.abs(got) - panda.velocity_limit
-        assert excess.max() <= CONSTRAINT_TOLERANCE, (
-            f"{case.description}: |v| exceeds the velocity limit of {panda.joint_names[int(np.argmax(excess))]} "
-            f"by {excess.max():.3g} rad/s")
+        joint = int(np.argmax(excess))
+        check(
+            excess.max() <= CONSTRAINT_TOLERANCE,
+            f"{case.description}: |v| = {abs(got[joint]):.5g} rad/s at {panda.joint_names[joint]} exceeds its "
+            f"velocity limit {panda.velocity_limit[joint]:.5g} rad/s by {excess.max():.3g} rad/s",
+        )
         q_next = case.q + got * case.dt
         outside = np.maximum(panda.lower - q_next, q_next - panda.upper)
-        assert outside.max() <= CONSTRAINT_TOLERANCE, (
-            f"{case.description}: q + v dt leaves the limits of {panda.joint_names[int(np.argmax(outside))]} "
-            f"by {outside.max():.3g} rad")
+        joint = int(np.argmax(outside))
+        check(
+            outside.max() <= CONSTRAINT_TOLERANCE,
+            f"{case.description}: q + v dt = {q_next[joint]:.5g} rad leaves the limits "
+            f"[{panda.lower[joint]:.5g}, {panda.upper[joint]:.5g}] rad of {panda.joint_names[joint]} "
+            f"by {outside.max():.3g} rad",
+        )
 
 
 def test_ex03_zero_error_gives_zero_velocity(submission, panda):
@@ -167,4 +205,7 @@ def test_ex03_zero_error_gives_zero_velocity(submission, panda):
     position, rotation = panda.tool_pose(q, np.zeros(3))
     case = Case("target = current tool pose", q, position, rotation, 0.05, np.ones(6), 1e-3, np.zeros(3))
     got = student_velocity(submission, panda, case)
-    assert np.abs(got).max() <= VELOCITY_TOLERANCE, f"{case.description}: expected v = 0, got {got.round(5).tolist()}"
+    check(
+        np.abs(got).max() <= VELOCITY_TOLERANCE,
+        f"{case.description} (q = {fmt(q, 4)} rad): expected v = 0, got {fmt(got)} rad/s",
+    )

@@ -36,8 +36,18 @@ def diff_ik_step(
     lower = np.maximum(-robot.velocity_limit, (robot.lower - q) / dt)
     upper = np.minimum(robot.velocity_limit, (robot.upper - q) / dt)
     solver = osqp.OSQP()
-    solver.setup(hessian, gradient, sp.identity(n, format="csc"), lower, upper,
-                 eps_abs=1e-9, eps_rel=1e-9, polishing=True, verbose=False, max_iter=100000)
+    solver.setup(
+        hessian,
+        gradient,
+        sp.identity(n, format="csc"),
+        lower,
+        upper,
+        eps_abs=1e-9,
+        eps_rel=1e-9,
+        polishing=True,
+        verbose=False,
+        max_iter=100000,
+    )
     result = solver.solve(raise_error=False)
     if result.info.status_val != osqp.SolverStatus.OSQP_SOLVED:
         raise RuntimeError(f"OSQP did not solve the step: {result.info.status}")

@@ -1,15 +1,17 @@
 """The course graders grade: they pass the reference solutions, fail the stubs and catch wrong ones.
 
-All submissions are graded in ONE run of ``course/grade.py`` (the instructors' tool, so it is
-tested too) over a folder of links: the reference solutions, the untouched exercise stubs, a file
-that does not import, and every plausible wrong solution ``wrong_solutions/<variant>/exNN_name.py``.
-Exercises and wrong solutions are discovered: each wrong solution lists in ``CAUGHT_BY`` the
-grader tests (name prefixes) that must fail on it.
+All submissions are graded by ``course/grade.py`` (the instructors' tool, so it is tested too) over
+folders of links: the reference solutions, the untouched exercise stubs, a file that does not
+import, every plausible wrong solution ``wrong_solutions/<variant>/exNN_name.py``, every cheating
+one ``cheating_solutions/<variant>/exNN_name.py`` (it calls an existing implementation: 0 points)
+and two endless loops. Exercises, wrong and cheating solutions are discovered: each wrong solution
+lists in ``CAUGHT_BY`` the grader tests (name prefixes) that must fail on it.
 """
 
 from __future__ import annotations
 
 import ast
+import concurrent.futures
 import json
 import subprocess
 import sys
@@ -20,13 +22,34 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 COURSE = REPO / "course"
 WRONG = Path(__file__).resolve().parent / "wrong_solutions"
+CHEATING = Path(__file__).resolve().parent / "cheating_solutions"
 EXERCISES = sorted(path.stem for path in (COURSE / "exercises").glob("ex*.py"))
 VARIANTS = sorted(path.name for path in WRONG.iterdir() if path.is_dir() and path.name.startswith("ex"))
+CHEATS = sorted(path.name for path in CHEATING.iterdir() if path.is_dir() and path.name.startswith("ex"))
+HONEST = Path(__file__).resolve().parent / "honest_solutions"
+HONEST_VARIANTS = sorted(path.name for path in HONEST.iterdir() if path.is_dir() and path.name.startswith("ex"))
+#: A loop the grader's per-call time limit cannot interrupt (it swallows every exception): only the
+#: per-exercise timeout of grade.py stops it.
+STUBBORN_LOOP = """import time
 
 
-def wrong_solution_file(variant: str) -> Path:
-    """The one exNN_name.py file of a wrong solution folder."""
-    files = sorted((WRONG / variant).glob("ex*.py"))
+def velocity_keypoints(demo, fraction=0.05):
+    while True:
+        try:
+            time.sleep(0.05)
+        except BaseException:
+            pass
+"""
+#: An ordinary endless loop: the per-call time limit stops it, the exercise's other tests fail at once.
+PLAIN_LOOP = """def velocity_keypoints(demo, fraction=0.05):
+    while True:
+        pass
+"""
+
+
+def wrong_solution_file(variant: str, folder: Path = WRONG) -> Path:
+    """The one exNN_name.py file of a wrong (or cheating) solution folder."""
+    files = sorted((folder / variant).glob("ex*.py"))
     assert len(files) == 1, f"{variant}: expected one exNN_name.py file, found {[f.name for f in files]}"
     return files[0]
 
@@ -45,7 +68,11 @@ def caught_by(variant: str) -> list[str]:
 def grade(submissions: Path, *extra: str) -> subprocess.CompletedProcess:
     return subprocess.run(
         [sys.executable, str(COURSE / "grade.py"), str(submissions), *extra],
-        cwd=REPO, capture_output=True, text=True, timeout=600, check=False,
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
     )
 
 
@@ -71,13 +98,34 @@ def grades(tmp_path_factory) -> dict:
         for variant in VARIANTS:
             if wrong_solution_file(variant).stem == exercise:
                 (wrong / variant).symlink_to(WRONG / variant)
+        for variant in CHEATS:
+            if wrong_solution_file(variant, CHEATING).stem == exercise:
+                (wrong / variant).symlink_to(CHEATING / variant)
+        for variant in HONEST_VARIANTS:
+            if wrong_solution_file(variant, HONEST).stem == exercise:
+                (wrong / variant).symlink_to(HONEST / variant)
         runs.append((wrong, ("--exercise", exercise)))
-    graded: dict = {}
-    for submissions, selection in runs:
+    loops = folder / "loops"
+    for name, source in (("loops_stubbornly", STUBBORN_LOOP), ("loops_plainly", PLAIN_LOOP)):
+        (loops / name).mkdir(parents=True)
+        (loops / name / "ex01_velocity_keypoints.py").write_text(source)
+    (loops / "loops_stubbornly" / "ex02_element_sampling.py").symlink_to(
+        COURSE / "solutions" / "ex02_element_sampling.py"
+    )
+    # first: its 30 s of a sleeping loop overlap the other runs
+    runs.insert(0, (loops, ("--exercise", "ex01", "--exercise", "ex02", "--timeout", "30", "--call-timeout", "5")))
+
+    def run(submissions: Path, selection: tuple[str, ...]) -> dict:
         out = submissions / "grades.json"
         result = grade(submissions, *selection, "--jobs", "2", "--out", str(out))
         assert result.returncode == 0, result.stderr
-        graded |= json.loads(out.read_text())
+        return json.loads(out.read_text())
+
+    graded: dict = {}
+    # two grade.py runs at a time: each run's last exercises would leave a core idle
+    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+        for result in pool.map(lambda args: run(*args), runs):
+            graded |= result
     return graded
 
 
@@ -137,3 +185,108 @@ def test_grade_rejects_a_missing_folder(tmp_path):
 
 def test_project_test_run_does_not_collect_the_course():
     assert 'testpaths = ["tests"]' in (REPO / "pyproject.toml").read_text()
+
+
+@pytest.mark.parametrize("variant", CHEATS)
+def test_cheating_solution_scores_zero_with_a_message(grades, variant):
+    exercise = wrong_solution_file(variant, CHEATING).stem
+    result = grades[variant][exercise]
+    assert result["status"] == "forbidden" and result["passed"] == 0, (result["status"], result["tests"])
+    forbidden = [message for message in result["messages"].values() if message.startswith("0 points for this exercise")]
+    assert forbidden and "existing implementation" in forbidden[0], result["messages"]
+
+
+@pytest.mark.parametrize("variant", HONEST_VARIANTS)
+def test_honest_solution_using_other_toolimit_names_is_not_refused(grades, variant):
+    exercise = wrong_solution_file(variant, HONEST).stem
+    result = grades[variant][exercise]
+    assert result["status"] == "graded" and result["passed"] == result["total"], result["messages"]
+
+
+def test_untouched_stub_is_one_line_not_attempted(grades):
+    assert {grade["status"] for grade in grades["stubs"].values()} == {"not attempted"}
+    sys.path.insert(0, str(COURSE))
+    try:
+        import grade as grade_module
+    finally:
+        sys.path.remove(str(COURSE))
+    report = grade_module.check_report(grades["stubs"]).splitlines()
+    assert len(report) == len(EXERCISES) and all(line.endswith("not attempted") for line in report), report
+
+
+def test_an_endless_loop_costs_only_its_exercise(grades):
+    stubborn = grades["loops_stubbornly"]
+    assert stubborn["ex01_velocity_keypoints"]["status"] == "timed out", stubborn["ex01_velocity_keypoints"]
+    assert stubborn["ex01_velocity_keypoints"]["passed"] == 0
+    assert "stopped after 30 s" in stubborn["ex01_velocity_keypoints"]["messages"]["run"]
+    plain = grades["loops_plainly"]["ex01_velocity_keypoints"]
+    assert plain["status"] == "graded" and plain["passed"] == 0, plain
+    assert plain["seconds"] < 30 and "did not return within 5 s" in next(iter(plain["messages"].values()))
+    other = stubborn["ex02_element_sampling"]
+    assert other["status"] == "graded" and other["passed"] == other["total"] > 0, other["messages"]
+
+
+def test_messages_are_plain_sentences(grades):
+    """No pytest assertion rewriting, no numpy reprs, in any message of any graded submission."""
+    for student, outcomes in grades.items():
+        for exercise, result in outcomes.items():
+            for test, message in result["messages"].items():
+                for noise in ("assert ", "AssertionError", "array(", "dtype=", "tensor(", "+  where", "Traceback"):
+                    assert noise not in message, f"{student} {exercise} {test}: {noise!r} in\n{message}"
+
+
+def test_gae_message_names_the_first_wrong_step_of_the_backward_recursion(grades):
+    messages = grades["ex05_off_by_one_done"]["ex05_ppo_objective"]["messages"]
+    gae = [message for test, message in messages.items() if test.startswith("test_ex05_gae_matches")]
+    assert gae and all("going backwards from t = T-1 = 11, the first wrong advantage is at t = " in m for m in gae)
+
+
+def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
+    out = tmp_path / "bundle"
+    result = subprocess.run(
+        [sys.executable, str(COURSE / "grade.py"), "bundle", str(out)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    files = {path.relative_to(out).as_posix() for path in out.rglob("*") if path.is_file()}
+    assert {"README.md", "grade.py", "graders/conftest.py", "graders/grading.py"} <= files
+    assert {f"exercises/{exercise}.py" for exercise in EXERCISES} <= files
+    assert {f"graders/test_{exercise}.py" for exercise in EXERCISES} <= files
+    solutions = {path.read_bytes() for path in (COURSE / "solutions").glob("*.py")}
+    assert not any("solution" in name for name in files), files
+    assert not any((out / name).read_bytes() in solutions for name in files)
+    again = subprocess.run(
+        [sys.executable, str(COURSE / "grade.py"), "bundle", str(out)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert again.returncode == 2 and "not an empty folder" in again.stderr
+    check = subprocess.run(
+        [sys.executable, str(out / "grade.py"), "check", "--exercise", "ex05"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert check.returncode == 0, check.stderr
+    assert check.stdout.split() == ["ex05_ppo_objective", "not", "attempted"], check.stdout
+    bare = tmp_path / "exam"
+    result = subprocess.run(
+        [sys.executable, str(COURSE / "grade.py"), "bundle", str(bare), "--without-graders"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    assert sorted(path.name for path in bare.iterdir()) == ["README.md", "exercises"]
+    assert "grade.py check" not in (bare / "README.md").read_text()

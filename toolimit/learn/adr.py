@@ -4,7 +4,7 @@ Under ADR (``adr=True`` of :class:`~toolimit.learn.simulator.TaskSimulator`, ``t
 --adr``) every reset places each instance's goal box at an (x, y) drawn uniformly inside the
 current bounds (:class:`AdrBounds`, world frame, m), and the policy observes it. The bounds start at
 the aligned position (the task's) and move by the rule of the authors' code
-(``../shared/reference/AUTHORS_SETUP.md``), run during PPO by
+(``docs/original_setup.md#adr``), run during PPO by
 :class:`~toolimit.learn.adr_callback.AdrCallback`:
 
 * every ``every`` updates, one coordinate and one of its two bounds are picked at random (from the

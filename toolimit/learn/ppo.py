@@ -1,6 +1,6 @@
 """PPO fine-tuning with stable-baselines3: presets, the policy of the paper, checkpoints and resume.
 
-The policy (DESIGN.md, AUTHORS_SETUP.md): Gaussian over the normalised joint velocities, mean and
+The policy (docs/method.md#the-policy, docs/original_setup.md#ppo): Gaussian over the normalised joint velocities, mean and
 value from separate 400-300 tanh MLPs. Its standard deviation is fixed at the authors' 0.2 rad/s
 after cloning (:func:`toolimit.learn.cloning.fix_action_std`); without cloning (the sparse-reward
 baseline) it is learned from 0.2 rad/s.
@@ -68,7 +68,7 @@ class PpoSettings:
         return kwargs
 
 
-#: ``authors``: AUTHORS_SETUP.md, the default. ``toolimit``: the same with the gradient norm
+#: ``authors``: docs/original_setup.md#ppo, the default. ``toolimit``: the same with the gradient norm
 #: clipped at 0.5 instead of 0.001 and one episode per update. Measured on the shipped planar spade
 #: (cloned from 8 rollouts, 3,000 cloning steps, 16 environments, 20 evaluation episodes every
 #: 6,912 steps up to 48 k, seed 0): ``authors`` keeps the deterministic success at 1.0 throughout

@@ -16,7 +16,7 @@ Observation (float32, per instance), the paper's state:
   3 + 4 + N + 1 + 2.
 Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's velocity limit (SB3 clips
   actions to a symmetric normalised space).
-Reward per step (AUTHORS_SETUP.md): (goal reward + velocity penalty) / H, where the penalty is
+Reward per step (docs/original_setup.md#robot-environment): (goal reward + velocity penalty) / H, where the penalty is
   -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) (rad/s, w = 0.01) on the joint velocity
   v. The authors' weight grew by 1e-4 per reset; here it is constant, so that a state earns the
   same return whatever the number of episodes before it. With ``reward="dense"`` (the paper's

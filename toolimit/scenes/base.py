@@ -55,8 +55,8 @@ def unpack_scene_params(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarra
     }
 
 
-#: b (1/m^2) of the paper appendix's dense rewards ("Dense rewards (baseline v)",
-#: ../shared/reference/AUTHORS_SETUP.md): every term is exp(-0.5 b d^2) of a distance d (m), a
+#: b (1/m^2) of the paper appendix's dense rewards (docs/original_setup.md#dense-rewards,
+#: the dense-reward baseline): every term is exp(-0.5 b d^2) of a distance d (m), a
 #: length scale 1 / sqrt(b) of about 0.32 m.
 DENSE_REWARD_B = 10.0
 #: The appendix's weights: of the spade's tool-to-deposit term (its sand term has weight 1) and of
@@ -173,7 +173,7 @@ class Scene(Protocol):
         divided by the horizon (the learning environment does that)."""
 
     def is_success(self) -> np.ndarray:
-        """(B,) bool: the paper's success test over the steps so far (see DESIGN.md)."""
+        """(B,) bool: the paper's success test over the steps so far (see docs/method.md#success-criteria)."""
 
     def footprints(self, params: SceneParams) -> np.ndarray:
         """(M, 5) ground rectangles the scene elements of ``params`` stand on, world x-y plane:
@@ -352,7 +352,7 @@ class GoalTimer:
 
 class WindowedGoalScene(SceneBase):
     """A scene that succeeds where its goal was met within ``success_window`` seconds of the start
-    of its clock (the hammers and the scythes: the paper's "within the first second", DESIGN.md).
+    of its clock (the hammers and the scythes: the paper's "within the first second", docs/method.md#success-criteria).
 
     The subclass starts the clock, :attr:`goal_timer`, with the first ``step`` after ``reset`` (each
     scene says at which instant), advances it and records when the goal is met.

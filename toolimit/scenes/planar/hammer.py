@@ -28,7 +28,7 @@ Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closen
 x-z plane distances, m): exp(-5 |p - n|^2), with p the tool frame origin (the hammer head's centre)
 and n the nail head's top centre where the nail is now; in [0, 1], 0 before the first step (no
 hammer yet). Success: planted at some control step whose end time, measured from the start of the
-first ``step`` after ``reset``, is at most ``success_window`` seconds (1 s, DESIGN.md).
+first ``step`` after ``reset``, is at most ``success_window`` seconds (1 s, docs/method.md#success-criteria).
 """
 
 from __future__ import annotations

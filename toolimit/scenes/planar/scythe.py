@@ -23,7 +23,7 @@ Rewards: goal reward = number of stalks cut. Dense reward (the paper's appendix,
 the mean over all stalks (the appendix's grass patches, cut or not) of exp(-5 |p - s|^2), with p
 the tool frame origin (the blade root) and s a stalk's point (its base and any point up the stalk
 coincide in this plane); in [0, 0.1], 0 before the first step (no scythe yet). Success: every
-stalk cut by the end of a control step ending at most ``success_window`` seconds (1 s, DESIGN.md)
+stalk cut by the end of a control step ending at most ``success_window`` seconds (1 s, docs/method.md#success-criteria)
 after the start of the first ``step`` after ``reset``.
 """
 

@@ -33,7 +33,7 @@ x-z plane distances, m): the mean over circles of exp(-5 |c - g|^2) + 0.05 exp(-
 c a circle centre, g the goal box's centre (where the box is now) at circle-radius height (where a
 delivered circle rests on the ground), p the tool frame origin (the blade tip) and d the deposit's
 floor centre; in [0, 1.05]. Before the first step there is no spade and the tool term is 0.
-Success (DESIGN.md): at least ``success_count`` (10) circles in the box for at least half of the
+Success (docs/method.md#success-criteria): at least ``success_count`` (10) circles in the box for at least half of the
 control steps since the reset.
 """
 

@@ -1,7 +1,7 @@
 """The 3D spade world: scoop sand from a deposit and drop it into a goal box.
 
 World frame: metres, z up, ground z = 0. The scene is the original experiments' PhysX scene
-(``../shared/reference/AUTHORS_SETUP.md``; kzorina/pyphysx_envs ``SpadeTaskScene``):
+(``docs/original_setup.md#spade-scene``; kzorina/pyphysx_envs ``SpadeTaskScene``):
 
 * the **sand deposit** is a 0.4 m x 0.4 m three-walled pen (walls 7 cm high, 1 cm thick) whose
   centre is the parameter ``sand_position`` and whose frame is turned by ``sand_yaw`` about z; in

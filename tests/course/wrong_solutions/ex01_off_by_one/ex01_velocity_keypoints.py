@@ -2,7 +2,6 @@
 
 import numpy as np
 
-
 #: The grader tests (name prefixes) that must fail on this file.
 CAUGHT_BY = [
     "test_ex01_keypoints_match_reference",

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import pdist
 
-
 #: The grader tests (name prefixes) that must fail on this file.
 CAUGHT_BY = [
     "test_ex02_elements_respect_min_distance",

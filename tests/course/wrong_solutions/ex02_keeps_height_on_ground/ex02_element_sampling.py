@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import pdist
 
-
 #: The grader tests (name prefixes) that must fail on this file.
 CAUGHT_BY = [
     "test_ex02_on_ground_elements_have_zero_height",
@@ -33,7 +32,7 @@ def sample_element_positions(
     n_keypoints = len(keypoints)
     weights = np.ones(n_keypoints) if weights is None else np.asarray(weights, dtype=float)
     weights = weights / weights.sum()
-    ground = np.zeros(n_elements, bool) if on_ground is None else np.asarray(on_ground, bool)
+    ground = np.zeros(n_elements, bool) if on_ground is None else np.asarray(on_ground, bool)  # noqa: F841 - the mistake
     for _ in range(max_attempts):
         chosen = rng.choice(n_keypoints, size=n_elements, p=weights)
         positions = keypoints[chosen] + rng.multivariate_normal(np.zeros(3), covariance, size=n_elements)

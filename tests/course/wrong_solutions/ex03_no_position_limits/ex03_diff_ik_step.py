@@ -9,7 +9,6 @@ import scipy.sparse as sp
 
 from toolimit.robots import RobotModel
 
-
 #: The grader tests (name prefixes) that must fail on this file.
 CAUGHT_BY = [
     "test_ex03_matches_reference_at_position_limits",
@@ -43,8 +42,18 @@ def diff_ik_step(
     lower = -robot.velocity_limit
     upper = robot.velocity_limit
     solver = osqp.OSQP()
-    solver.setup(hessian, gradient, sp.identity(n, format="csc"), lower, upper,
-                 eps_abs=1e-9, eps_rel=1e-9, polishing=True, verbose=False, max_iter=100000)
+    solver.setup(
+        hessian,
+        gradient,
+        sp.identity(n, format="csc"),
+        lower,
+        upper,
+        eps_abs=1e-9,
+        eps_rel=1e-9,
+        polishing=True,
+        verbose=False,
+        max_iter=100000,
+    )
     result = solver.solve(raise_error=False)
     if result.info.status_val != osqp.SolverStatus.OSQP_SOLVED:
         raise RuntimeError(f"OSQP did not solve the step: {result.info.status}")

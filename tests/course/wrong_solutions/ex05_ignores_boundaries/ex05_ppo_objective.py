@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 #: The grader tests (name prefixes) that must fail on this file.
-CAUGHT_BY = ['test_ex05_gae_matches_stable_baselines3']
+CAUGHT_BY = ["test_ex05_gae_matches_stable_baselines3"]
 
 
 def generalized_advantage_estimation(rewards, values, episode_starts, last_values, dones, gamma, gae_lambda):
