@@ -30,7 +30,7 @@ from toolimit.learn.evaluate import Evaluation, evaluate, save_rollout_trajector
 from toolimit.learn.task import LearningTask, task_from_pipeline
 from toolimit.learn.training import LEARNING_JSON, LearningConfig, LearningOutcome, learn_policy, load_policy
 from toolimit.pipeline.settings import AlignSettings, EvaluationSettings, ExportSettings, TrajoptSettings
-from toolimit.robots import make_robot
+from toolimit.robots import RobotModel, make_robot
 from toolimit.trajopt.problem import PoseTargets
 from toolimit.trajopt.result import TrackedScene, TrajectoryResult
 from toolimit.trajopt.selection import (
@@ -186,7 +186,7 @@ def trajopt_from_poses(
     return trajectory
 
 
-def _track(robot: Any, targets: PoseTargets, settings: TrajoptSettings, progress: bool) -> TrajectoryResult:
+def _track(robot: RobotModel, targets: PoseTargets, settings: TrajoptSettings, progress: bool) -> TrajectoryResult:
     """``targets`` tracked at the first time scale, or the first of several that tracks within 1 cm."""
     rng = np.random.default_rng(settings.seed)
     options = settings.track_options(progress)
