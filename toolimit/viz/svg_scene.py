@@ -39,7 +39,7 @@ def scene_plane_svg(
         if array.ndim == 3 and array.shape[1] == 2:  # segments: one sub-path each, NaN between
             gaps = np.full((len(array), 1, 3), np.nan)
             joined = np.concatenate([array, gaps], axis=1).reshape(-1, 3)
-            series.append(Series(name, joined[:, h], joined[:, v], colour="#444444"))
+            series.append(Series(name, joined[:, h], joined[:, v]))
         elif array.ndim == 2:
             series.append(Series(name, array[:, h], array[:, v], line=False, markers=True))
     for name, path in (paths or {}).items():
