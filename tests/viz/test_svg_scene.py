@@ -45,6 +45,15 @@ def test_a_planar_spade_snapshot_from_above_and_in_its_plane():
     ]
 
 
+def test_footprints_are_outlined_from_above():
+    root = ET.fromstring(
+        scene_plane_svg({}, "top", footprints={"goal box": np.array([1.0, 2.0, 0.25, 0.25, 0.0])}, plane="xy")
+    )
+    (box,) = [p for p in root.iter(f"{SVG}path") if p.find(f"{SVG}title").text == "goal box"]
+    assert box.get("d").count("L") == 4  # a closed rectangle: 5 corners
+    assert "ground (z = 0)" not in legend(root)
+
+
 def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="unknown plane"):
         scene_plane_svg({}, "t", plane="yz")

@@ -3,8 +3,9 @@
 Draws what a scene's ``snapshot()`` holds, whatever the scene, by the arrays' shapes (world frame,
 m): (K, 2, 3) arrays are segments (walls, the tool's segments, a board's corners), (N, 3) arrays are
 points (sand grains, stalks, a nail's top); other entries are left out. Named paths (N, 3) (the
-tool head's path, the keypoints) are added as lines, keypoints as markers. In the vertical x-z
-plane the ground (z = 0) is drawn; in the x-y plane the picture is a view from above.
+tool head's path) are added as lines, named points (keypoints) as markers, named ground rectangles
+(a scene's ``footprints``) as outlines. In the vertical x-z plane the ground (z = 0) is drawn; in
+the x-y plane the picture is a view from above.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from toolimit.viz.svg_plot import Series, line_plot_svg
+from toolimit.viz.svg_plot import Series, line_plot_svg, outline
 
 #: Plane name -> the world axes it shows (horizontal, vertical).
 PLANES = {"xz": (0, 2), "xy": (0, 1)}
@@ -25,9 +26,11 @@ def scene_plane_svg(
     paths: Mapping[str, np.ndarray] | None = None,
     markers: Mapping[str, np.ndarray] | None = None,
     plane: str = "xz",
+    footprints: Mapping[str, np.ndarray] | None = None,
 ) -> str:
     """The SVG text of ``snapshot``'s segments and points, the lines ``paths`` and the points
-    ``markers`` (each (N, 3), world frame, m), projected onto ``plane`` ("xz" or "xy")."""
+    ``markers`` (each (N, 3), world frame, m), projected onto ``plane`` ("xz" or "xy"); in the
+    x-y plane also the ``footprints`` (each (5,): centre x, y, half-length, half-width (m), yaw)."""
     if plane not in PLANES:
         raise ValueError(f"unknown plane {plane!r}; choose one of {', '.join(PLANES)}")
     h, v = PLANES[plane]
@@ -46,6 +49,8 @@ def scene_plane_svg(
         series.append(Series(name, np.asarray(path)[:, h], np.asarray(path)[:, v]))
     for name, points in (markers or {}).items():
         series.append(Series(name, np.asarray(points)[:, h], np.asarray(points)[:, v], line=False, markers=True))
+    for name, footprint in (footprints or {}).items() if plane == "xy" else ():
+        series.append(Series(name, *outline(footprint)))
     if not series:
         raise ValueError("nothing to draw: no segments, points or paths")
     if plane == "xz":
