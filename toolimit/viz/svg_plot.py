@@ -122,8 +122,8 @@ def line_plot_svg(
         colour = s.colour or PALETTE[index % len(PALETTE)]
         sx, sy = px(x, y)
         finite = np.isfinite(sx) & np.isfinite(sy)
+        dash = ' stroke-dasharray="6 4"' if s.dashed else ""
         if s.line:
-            dash = ' stroke-dasharray="6 4"' if s.dashed else ""
             parts.append(
                 f'<path class="series" d="{_path(sx, sy, finite)}" fill="none" stroke="{colour}" stroke-width="1.8"'
                 f'{dash} clip-path="url(#{clip})"><title>{escape(s.label)}</title></path>'
@@ -139,7 +139,7 @@ def line_plot_svg(
             parts.append("</g>")
         row = legend_y + LEGEND_ROW * index
         key = (
-            f'<line x1="{LEFT}" x2="{LEFT + 22}" y1="{row - 4:.1f}" y2="{row - 4:.1f}" stroke="{colour}" stroke-width="2"/>'
+            f'<line x1="{LEFT}" x2="{LEFT + 22}" y1="{row - 4:.1f}" y2="{row - 4:.1f}" stroke="{colour}" stroke-width="2"{dash}/>'
             if s.line
             else f'<circle cx="{LEFT + 11}" cy="{row - 4:.1f}" r="3.5" fill="{colour}"/>'
         )
