@@ -46,7 +46,9 @@ def test_one_series_per_run_one_marker_per_update(tmp_path):
 def test_goal_reward_axis_follows_the_data(tmp_path):
     root = ET.fromstring(learning_curve_svg({"run": write_curve(tmp_path / "a.jsonl", [0.0, 2.0])}, "goal_reward_mean"))
     ticks = [float(t.text) for t in root.iter(f"{SVG}text") if t.get("class") == "y-tick"]
-    assert ticks[-1] == 20.0
+    assert ticks[0] == 0.0 and ticks[-1] == 20.0
+    root = ET.fromstring(learning_curve_svg({"run": write_curve(tmp_path / "b.jsonl", [1.5, 2.0])}, "goal_reward_mean"))
+    assert [t.text for t in root.iter(f"{SVG}text") if t.get("class") == "y-tick"][0] == "0"  # from 0, not from 15
 
 
 def test_unknown_metric_and_empty_curve_are_refused(tmp_path):

@@ -28,10 +28,11 @@ def learning_curve_svg(
     curves: Mapping[str, str | os.PathLike[str]], metric: str = "success_rate", title: str | None = None
 ) -> str:
     """The SVG text of ``metric`` against PPO env steps for each run: ``curves`` maps a run's
-    label to its ``curve.jsonl``. The success rate's axis spans [0, 1]."""
+        label to its ``curve.jsonl``. The axis of the success rate spans [0, 1], that of the goal reward
+    starts at 0."""
     if metric not in METRICS:
         raise ValueError(f"unknown metric {metric!r}; choose one of {', '.join(METRICS)}")
-    series = []
+    series, top = [], 1.0
     for label, path in curves.items():
         records = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
         if not records:
@@ -39,10 +40,12 @@ def learning_curve_svg(
         steps = [float(record["env_steps"]) for record in records]
         values = [float(record[metric]) for record in records]
         series.append(Series(label, steps, values, markers=True))
+        top = max([top, *values])
+    counts = metric in ("success_rate", "goal_reward_mean")  # never negative: the axis starts at 0
     return line_plot_svg(
         series,
         title or METRICS[metric],
         "PPO environment steps",
         METRICS[metric],
-        y_range=(-0.05, 1.05) if metric == "success_rate" else None,
+        y_range=(-0.05 * top, 1.05 * top) if counts else None,
     )
