@@ -2,14 +2,17 @@
 
 Each ``notebooks/*.ipynb`` (new ones are picked up automatically) is executed with nbclient in a
 ``python3`` kernel of this interpreter, working directory ``notebooks/``, with ``TOOLIMIT_QUICK=1``
-so that the notebooks shrink their budgets. A failing cell fails the test with the cell's source
-and error.
+so that the notebooks shrink their budgets, and with this checkout first on the kernel's
+``PYTHONPATH`` (the kernel imports the ``toolimit`` under test, not another installed copy). A
+failing cell fails the test with the cell's source and error. Each notebook must show at least one
+inline figure (an SVG or HTML output), and weigh less than ``MAX_EXECUTED_BYTES`` executed.
 
 To store a notebook without outputs: ``python tests/test_notebooks.py --strip notebooks/NAME.ipynb``.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -17,12 +20,15 @@ from pathlib import Path
 import nbformat
 import pytest
 
-NOTEBOOKS_DIR = Path(__file__).resolve().parents[1] / "notebooks"
+REPO = Path(__file__).resolve().parents[1]
+NOTEBOOKS_DIR = REPO / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOKS_DIR.glob("*.ipynb"))
 #: Seconds one cell may run under TOOLIMIT_QUICK=1.
 CELL_TIMEOUT_S = 300
 #: Largest executed notebook, bytes: 3D views are linked files, not pages copied into the notebook.
 MAX_EXECUTED_BYTES = 2_000_000
+#: Output types that are an inline figure.
+FIGURE_TYPES = ("image/svg+xml", "text/html")
 #: Terminal colour codes in IPython tracebacks.
 ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -61,6 +67,7 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
 
     monkeypatch.setenv("TOOLIMIT_QUICK", "1")
     monkeypatch.setenv("RERUN_NOTEBOOK_ASSET", "inline")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     notebook = nbformat.read(path, as_version=4)
     client = NotebookClient(
         notebook,
@@ -79,6 +86,14 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
     assert size < MAX_EXECUTED_BYTES, f"{path.name} weighs {size / 1e6:.1f} MB executed (limit 2 MB)"
     printed = "".join(output.get("text", "") for cell in notebook.cells for output in cell.get("outputs", []))
     assert "IProgress not found" not in printed, f"{path.name}: tqdm warns that ipywidgets is missing"
+    figures = [
+        kind
+        for cell in notebook.cells
+        for output in cell.get("outputs", [])
+        for kind in output.get("data", {})
+        if kind in FIGURE_TYPES
+    ]
+    assert figures, f"{path.name} shows no inline figure (SVG or HTML output)"
 
 
 if __name__ == "__main__":
