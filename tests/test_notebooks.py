@@ -2,14 +2,22 @@
 
 Each ``notebooks/*.ipynb`` (new ones are picked up automatically) is executed with nbclient in a
 ``python3`` kernel of this interpreter, working directory ``notebooks/``, with ``TOOLIMIT_QUICK=1``
-so that the notebooks shrink their budgets. A failing cell fails the test with the cell's source
-and error.
+so that the notebooks shrink their budgets, and with this checkout first on the kernel's
+``PYTHONPATH`` (the kernel imports the ``toolimit`` under test, not another installed copy). A
+failing cell fails the test with the cell's source and error. Each notebook must show at least one
+inline figure (an SVG or HTML output), and weigh less than ``MAX_EXECUTED_BYTES`` executed.
+
+A number the text quotes from the notebook's own output is marked in the markdown as
+``<span class="printed">0.07</span>`` (rendered as plain text): the executed notebook must print it
+(as a whole number token: ``0.5`` is not found in ``0.51``). Mark only what any run prints, whatever
+the budget and whether ``../shared`` is present.
 
 To store a notebook without outputs: ``python tests/test_notebooks.py --strip notebooks/NAME.ipynb``.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -17,12 +25,17 @@ from pathlib import Path
 import nbformat
 import pytest
 
-NOTEBOOKS_DIR = Path(__file__).resolve().parents[1] / "notebooks"
+REPO = Path(__file__).resolve().parents[1]
+NOTEBOOKS_DIR = REPO / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOKS_DIR.glob("*.ipynb"))
 #: Seconds one cell may run under TOOLIMIT_QUICK=1.
 CELL_TIMEOUT_S = 300
 #: Largest executed notebook, bytes: 3D views are linked files, not pages copied into the notebook.
 MAX_EXECUTED_BYTES = 2_000_000
+#: Output types that are an inline figure.
+FIGURE_TYPES = ("image/svg+xml", "text/html")
+#: A number the text quotes from the notebook's own output (module docstring).
+PRINTED_MARK = re.compile(r'<span class="printed">([^<]+)</span>')
 #: Terminal colour codes in IPython tracebacks.
 ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -34,6 +47,27 @@ def strip_outputs(notebook: nbformat.NotebookNode) -> nbformat.NotebookNode:
             cell.outputs = []
             cell.execution_count = None
     return notebook
+
+
+def output_text(notebook: nbformat.NotebookNode) -> str:
+    """Everything the code cells printed or returned as text."""
+    return "\n".join(
+        output.get("text", "") or output.get("data", {}).get("text/plain", "")
+        for cell in notebook.cells
+        for output in cell.get("outputs", [])
+    )
+
+
+def unprinted_claims(notebook: nbformat.NotebookNode) -> list[str]:
+    """The marked numbers of the markdown cells that no output of ``notebook`` prints."""
+    printed = output_text(notebook)
+    return [
+        claim
+        for cell in notebook.cells
+        if cell.cell_type == "markdown"
+        for claim in PRINTED_MARK.findall(cell.source)
+        if not re.search(rf"(?<![\w.]){re.escape(claim.strip())}(?!\w)", printed)
+    ]
 
 
 def test_notebooks_exist():
@@ -61,6 +95,7 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
 
     monkeypatch.setenv("TOOLIMIT_QUICK", "1")
     monkeypatch.setenv("RERUN_NOTEBOOK_ASSET", "inline")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     notebook = nbformat.read(path, as_version=4)
     client = NotebookClient(
         notebook,
@@ -77,8 +112,29 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
         pytest.fail(f"{path.name} failed:\n{failure}", pytrace=False)
     size = len(nbformat.writes(notebook).encode())
     assert size < MAX_EXECUTED_BYTES, f"{path.name} weighs {size / 1e6:.1f} MB executed (limit 2 MB)"
-    printed = "".join(output.get("text", "") for cell in notebook.cells for output in cell.get("outputs", []))
-    assert "IProgress not found" not in printed, f"{path.name}: tqdm warns that ipywidgets is missing"
+    assert "IProgress not found" not in output_text(notebook), f"{path.name}: tqdm warns that ipywidgets is missing"
+    unprinted = unprinted_claims(notebook)
+    assert not unprinted, f"{path.name}: the text quotes {unprinted} as printed, but no output prints them"
+    figures = [
+        kind
+        for cell in notebook.cells
+        for output in cell.get("outputs", [])
+        for kind in output.get("data", {})
+        if kind in FIGURE_TYPES
+    ]
+    assert figures, f"{path.name} shows no inline figure (SVG or HTML output)"
+
+
+def test_a_marked_number_must_be_printed_as_a_whole_token():
+    notebook = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_markdown_cell('clip <span class="printed">0.5</span>, <span class="printed">200</span> spheres'),
+            nbformat.v4.new_code_cell("", outputs=[nbformat.v4.new_output("stream", text="max_grad_norm 0.51, 200 spheres")]),
+        ]
+    )
+    assert unprinted_claims(notebook) == ["0.5"]
+    notebook.cells[1].outputs[0].text += "\nclip 0.5."
+    assert unprinted_claims(notebook) == []
 
 
 if __name__ == "__main__":

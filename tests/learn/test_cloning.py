@@ -8,8 +8,15 @@ import torch
 
 from toolimit.errors import InputError
 from toolimit.learn import BatchedTaskVecEnv
-from toolimit.learn.cloning import (action_mean, clone, collect_demonstrations, discounted_returns, fix_action_std,
-                                    mean_action_loss, normalised_action_std)
+from toolimit.learn.cloning import (
+    action_mean,
+    clone,
+    collect_demonstrations,
+    discounted_returns,
+    fix_action_std,
+    mean_action_loss,
+    normalised_action_std,
+)
 from toolimit.learn.ppo import PRESETS, make_ppo
 
 
@@ -91,3 +98,17 @@ def test_clone_refuses_a_budget_it_cannot_run(spade_task, argument, value, said)
     with pytest.raises(InputError, match=f"^{said}$"):
         clone(model.policy, data, **{argument: value}, progress=False)
     assert torch.equal(torch.cat([p.detach().flatten() for p in model.policy.parameters()]), before)
+
+
+def test_on_loss_receives_every_steps_loss(spade_task):
+    model = _model(spade_task)
+    data = collect_demonstrations(spade_task, rollouts=1, seed=0)
+    seen = []
+    report = clone(model.policy, data, steps=5, value_steps=3, progress=False,
+                   on_loss=lambda phase, step, loss: seen.append((phase, step, loss)))
+    assert [(phase, step) for phase, step, _ in seen] == [("cloning", k) for k in range(5)] + [
+        ("value warm-up", k) for k in range(3)
+    ]
+    # one rollout fits in a batch: the first step's loss is the whole data's loss before cloning
+    assert np.isclose(seen[0][2], report.action_loss_start)
+    assert np.isclose(seen[5][2], report.value_loss_start)

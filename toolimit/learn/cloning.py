@@ -149,6 +149,7 @@ def clone(
     batch_size: int = 512,
     seed: int = 0,
     progress: bool = True,
+    on_loss: Callable[[str, int, float], None] | None = None,
 ) -> CloningReport:
     """Fit the policy's action mean to the demonstrations (Adam, the authors' 6,000 steps at 1e-4),
     then warm the value network up on their returns (``value_steps``, same optimiser settings).
@@ -157,6 +158,10 @@ def clone(
     full batch: one rollout of a few hundred steps), else ``batch_size`` pairs drawn at random
     (seeded by ``seed``), so that more rollouts do not make a step dearer. The standard deviation
     is left as it is (see :func:`fix_action_std`).
+
+    ``on_loss(phase, step, loss)``, if given, receives every step's training loss (on that step's
+    rows, before the step): phase ``"cloning"`` (action MSE, normalised units^2) then
+    ``"value warm-up"`` (value MSE); the learning curves.
     """
     for name, value, lowest in (("steps", steps, 0), ("value_steps", value_steps, 0), ("batch_size", batch_size, 1)):
         if value < lowest:
@@ -177,9 +182,11 @@ def clone(
         return torch.mean((policy.predict_values(observations[rows]).flatten() - returns[rows]) ** 2)
 
     size = len(observations)
-    action_losses = _fit(actor, action_loss, size, batch_size, steps, learning_rate, generator, progress, "cloning")
+    action_losses = _fit(
+        actor, action_loss, size, batch_size, steps, learning_rate, generator, progress, "cloning", on_loss
+    )
     value_losses = _fit(
-        critic, value_loss, size, batch_size, value_steps, learning_rate, generator, progress, "value warm-up"
+        critic, value_loss, size, batch_size, value_steps, learning_rate, generator, progress, "value warm-up", on_loss
     )
     return CloningReport(action_losses[0], action_losses[-1], value_losses[0], value_losses[-1])
 
@@ -194,17 +201,21 @@ def _fit(
     generator: torch.Generator,
     progress: bool,
     description: str,
+    on_loss: Callable[[str, int, float], None] | None = None,
 ) -> list[float]:
     """Minimise ``loss_of(rows)`` over ``parameters`` for ``steps`` Adam steps on minibatches of
-    ``batch_size`` of ``size`` rows (all rows if fewer); the whole-data loss before and after."""
+    ``batch_size`` of ``size`` rows (all rows if fewer); the whole-data loss before and after.
+    ``on_loss(description, step, loss)`` receives each step's minibatch loss."""
     optimiser = torch.optim.Adam(parameters, lr=learning_rate)
     everything = slice(None)
     with torch.no_grad():
         losses = [float(loss_of(everything))]
-    for _ in tqdm(range(steps), desc=description, unit="step", disable=not progress, leave=False):
+    for step in tqdm(range(steps), desc=description, unit="step", disable=not progress, leave=False):
         rows = everything if size <= batch_size else torch.randint(size, (batch_size,), generator=generator)
         optimiser.zero_grad()
         loss = loss_of(rows)
+        if on_loss is not None:
+            on_loss(description, step, float(loss.detach()))
         loss.backward()
         optimiser.step()
     with torch.no_grad():
