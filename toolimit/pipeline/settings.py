@@ -23,7 +23,6 @@ from toolimit.errors import InvalidSetting
 from toolimit.learn.evaluate import EVALUATION_SEED
 from toolimit.learn.training import LearningConfig
 from toolimit.trajopt.problem import TrackingWeights
-from toolimit.trajopt.time_scale import TIME_SCALE_GRID
 from toolimit.trajopt.track import INITIALISATIONS, TrackOptions
 
 Settings = TypeVar("Settings")
@@ -214,10 +213,6 @@ QUICK: dict[str, Any] = {
     "evaluation.episodes": 4,
 }
 
-#: ``TrajoptSettings.time_scales`` of ``auto``: the slow-down factors tried.
-AUTO_TIME_SCALES = TIME_SCALE_GRID
-
-
 def get_value(settings: Any, path: str) -> Any:
     """The value at a dotted ``path`` of nested settings, e.g. ``"align.search.samples"``."""
     for name in path.split("."):
@@ -242,7 +237,6 @@ def with_values(settings: Settings, values: Mapping[str, Any]) -> Settings:
 
 
 __all__ = [
-    "AUTO_TIME_SCALES",
     "AlignSettings",
     "EvaluationSettings",
     "ExportSettings",
