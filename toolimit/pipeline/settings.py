@@ -213,6 +213,7 @@ QUICK: dict[str, Any] = {
     "evaluation.episodes": 4,
 }
 
+
 def get_value(settings: Any, path: str) -> Any:
     """The value at a dotted ``path`` of nested settings, e.g. ``"align.search.samples"``."""
     for name in path.split("."):
