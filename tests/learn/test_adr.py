@@ -126,7 +126,6 @@ def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, m
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
     learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
                  progress=False)
-    (tmp_path / "split" / "policy.zip").unlink()
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     assert resumed.record["resumed"]
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)

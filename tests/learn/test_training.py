@@ -26,9 +26,9 @@ def test_files_and_record(spade_task, tmp_path):
     horizon = spade_task.horizon
     config = LearningConfig(**{**TINY.__dict__, "timesteps": 2 * horizon * 2})
     outcome = learn_policy(spade_task, tmp_path, config, progress=False)
-    for name in ("task.npz", "cloning.json", "checkpoint.zip", "checkpoint.json", "policy.zip", "learning.json",
-                 CURVE_JSONL):
+    for name in ("task.npz", "cloning.json", "checkpoint.json", "policy.zip", "learning.json", CURVE_JSONL):
         assert (tmp_path / name).is_file(), name
+    assert not (tmp_path / "checkpoint.zip").exists()  # the final checkpoint is policy.zip: one copy
     record = json.loads((tmp_path / "learning.json").read_text())
     assert record["ppo_env_steps"] == 2 * horizon * 2 and record["cloning_env_steps"] == 2 * horizon
     assert record["env_steps"] == record["ppo_env_steps"] + record["cloning_env_steps"]
@@ -42,18 +42,35 @@ def test_files_and_record(spade_task, tmp_path):
 
 
 def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
-    """Three updates in one go, or one update, a stop, and a second call for the rest: same network."""
+    """Three updates in one go, or stopped during the third and run again: same network."""
     per_update = spade_task.horizon * 2  # 1 episode per update (toolimit preset) x 2 envs
     three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
-    learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
-                 progress=False)
-    (tmp_path / "split" / "policy.zip").unlink()  # as if stopped right after the checkpoint
+
+    def stop(record: dict) -> None:  # called as the third update's rollout starts
+        if record["env_steps"] == 2 * per_update:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        learn_policy(spade_task, tmp_path / "split", three, on_record=stop, progress=False)
+    assert (tmp_path / "split" / "checkpoint.zip").is_file() and not (tmp_path / "split" / "policy.zip").exists()
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
     lines = (tmp_path / "split" / CURVE_JSONL).read_text().splitlines()
     assert len(lines) == 3
+
+
+def test_a_finished_run_continues_to_a_larger_budget_exactly(spade_task, tmp_path):
+    """One update, finished (its final checkpoint is policy.zip), then run to three: as in one go."""
+    per_update = spade_task.horizon * 2
+    three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
+    whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
+    learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
+                 progress=False)
+    resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
+    assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
+    np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
 
 
 def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path):

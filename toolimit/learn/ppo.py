@@ -150,12 +150,14 @@ class _Checkpoints(BaseCallback):
         return True
 
 
-def save_checkpoint(model: PPO, directory: Path) -> None:
-    """Write ``checkpoint.zip`` (SB3: parameters, optimiser) and ``checkpoint.json`` (steps done,
-    the environment's generator state before its last reset, torch's random state, the ADR state)
-    atomically."""
+def save_checkpoint(model: PPO, directory: Path, model_file: str = CHECKPOINT_ZIP) -> None:
+    """Write the model (SB3: parameters, optimiser) to ``model_file`` and ``checkpoint.json`` (that
+    file's name, steps done, the environment's generator state before its last reset, torch's random
+    state, the ADR state) atomically. The final checkpoint of :func:`train` is ``policy.zip`` itself,
+    so that a finished run keeps one copy of its model (``checkpoint.zip`` is then removed)."""
     env: BatchedTaskVecEnv = model.get_env()  # type: ignore[assignment]
     state = {
+        "model": model_file,
         "num_timesteps": int(model.num_timesteps),
         "env_rng": env.rng_state_at_reset,
         "torch_rng": torch.get_rng_state().tolist(),
@@ -164,17 +166,22 @@ def save_checkpoint(model: PPO, directory: Path) -> None:
     }
     if env.adr is not None:
         state["adr"] = env.adr.state_dict()
-    with atomic_path(directory / CHECKPOINT_ZIP) as tmp:
+    with atomic_path(directory / model_file) as tmp:
         model.save(tmp)
     save_json(directory / CHECKPOINT_STATE, state)
+    if model_file != CHECKPOINT_ZIP:
+        (directory / CHECKPOINT_ZIP).unlink(missing_ok=True)
 
 
 def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
     """The model of ``directory``'s checkpoint with ``env`` and random states restored, or None."""
-    zip_path, state_path = directory / CHECKPOINT_ZIP, directory / CHECKPOINT_STATE
-    if not (zip_path.is_file() and state_path.is_file()):
+    state_path = directory / CHECKPOINT_STATE
+    if not state_path.is_file():
         return None
     state = json.loads(state_path.read_text())
+    zip_path = directory / state.get("model", CHECKPOINT_ZIP)
+    if not zip_path.is_file():
+        return None
     model = PPO.load(zip_path, env=env, device="cpu")
     model.num_timesteps = int(state["num_timesteps"])
     model.policy.log_std.requires_grad_(bool(state["learn_std"]))
@@ -202,8 +209,9 @@ def train(
     callbacks: list[BaseCallback] | None = None,
 ) -> PPO:
     """Run PPO until ``model.num_timesteps`` reaches ``total_timesteps``, checkpointing into
-    ``directory`` every ``checkpoint_every`` updates and at the end; ``policy.zip`` is the final
-    model. Interrupted (Ctrl-C), the last checkpoint stays: :func:`resume_or_start` continues it."""
+    ``directory`` every ``checkpoint_every`` updates; ``policy.zip`` is the final model and the final
+    checkpoint (a larger budget continues from it). Interrupted (Ctrl-C), the last checkpoint stays:
+    :func:`resume_or_start` continues it."""
     directory = Path(directory)
     remaining = total_timesteps - model.num_timesteps
     if remaining > 0:
@@ -213,9 +221,7 @@ def train(
             reset_num_timesteps=False,
             log_interval=1,
         )
-    save_checkpoint(model, directory)
-    with atomic_path(directory / POLICY_ZIP) as tmp:
-        model.save(tmp)
+    save_checkpoint(model, directory, POLICY_ZIP)
     return model
 
 

@@ -2,7 +2,7 @@
 
 ``learn_policy(task, out_dir, LearningConfig(...))`` writes into ``out_dir``:
 ``task.npz`` (the task), ``cloning.json`` (data and losses), ``checkpoint.zip/.json`` (every few
-updates), ``curve.jsonl`` (one line per update: env steps, mean return, success rate, goal reward,
+updates; once finished, ``checkpoint.json`` names ``policy.zip``, the one copy of the final model), ``curve.jsonl`` (one line per update: env steps, mean return, success rate, goal reward,
 standard deviation, KL; under ADR the goal box bounds ``adr_low``, ``adr_high`` the update's
 episodes were drawn in), ``policy.zip`` (the final SB3 model) and ``learning.json`` (settings,
 env steps, wall time split between simulation and learning; under ADR the final bounds and every
