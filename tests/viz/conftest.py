@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import gzip
 import os
 import re
 from pathlib import Path
@@ -12,13 +13,17 @@ import meshcat
 import pytest
 import umsgpack
 
-_PAYLOAD = re.compile(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)")
+_COMMANDS = re.compile(r"run\(\[(.*?)\]\);", re.S)
+_PAYLOAD = re.compile(r'"([A-Za-z0-9+/=]+)"')
 
 
 def decode_html_commands(path: Path) -> list[dict]:
-    """The meshcat commands (set_object, set_transform, set_animation, ...) of a static page."""
+    """The meshcat commands (set_object, set_transform, set_animation, ...) of a static page, in
+    the order the page runs them (each is gzip-compressed msgpack in base64)."""
     text = path.read_text(encoding="utf-8")
-    return [umsgpack.unpackb(base64.b64decode(payload)) for payload in _PAYLOAD.findall(text)]
+    block = _COMMANDS.search(text)
+    assert block is not None, f"{path}: no command list"
+    return [umsgpack.unpackb(gzip.decompress(base64.b64decode(p))) for p in _PAYLOAD.findall(block.group(1))]
 
 
 @pytest.fixture

@@ -16,6 +16,8 @@ World frame: metres, z up, ground z = 0. Frames of a replay are scene ``snapshot
 
 from __future__ import annotations
 
+import base64
+import gzip
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -28,7 +30,7 @@ import pinocchio as pin
 import umsgpack
 from meshcat.animation import Animation
 from meshcat.servers.tree import SceneTree, find_node, walk
-from meshcat.servers.zmqserver import VIEWER_ROOT, create_command
+from meshcat.servers.zmqserver import VIEWER_ROOT
 from pinocchio.visualize import MeshcatVisualizer
 from pinocchio.visualize.meshcat_visualizer import applyScalingOnHomegeneousTransform
 
@@ -52,7 +54,17 @@ _HTML = """<!DOCTYPE html>
         </script>
         <script>
             var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
+            // each command: gzip-compressed msgpack, run in the order recorded
+            async function run(commands) {{
+                for (const command of commands) {{
+                    const packed = await fetch("data:application/gzip;base64," + command);
+                    const stream = packed.body.pipeThrough(new DecompressionStream("gzip"));
+                    viewer.handle_command_bytearray(new Uint8Array(await new Response(stream).arrayBuffer()));
+                }}
+            }}
+            run([
 {commands}
+            ]);
         </script>
         <style>
             body {{margin: 0; }}
@@ -100,18 +112,22 @@ class StaticViewerWindow:
             raise ValueError(f"unsupported meshcat command {kind!r} in a static view")
 
     def get_scene(self) -> str:
-        """The self-contained HTML page: meshcat's viewer script and the recorded scene."""
-        commands = []
+        """The self-contained HTML page: meshcat's viewer script and the recorded scene, each
+        command gzip-compressed (the browser's ``DecompressionStream`` inflates it): a Panda rollout
+        page (the shipped 3D spade task, every other frame) takes 6.5 MB instead of meshcat's 19.2 MB,
+        nearly all of it the robot's meshes."""
+        packed: list[bytes] = []
         for node in walk(self.tree):
             if node.object is not None:
-                commands.append(create_command(node.object))
-            commands.extend(create_command(p) for p in node.properties)
+                packed.append(node.object)
+            packed.extend(node.properties)
             if node.transform is not None:
-                commands.append(create_command(node.transform))
+                packed.append(node.transform)
             if node.animation is not None:
-                commands.append(create_command(node.animation))
+                packed.append(node.animation)
+        commands = ",\n".join(f'"{base64.b64encode(gzip.compress(data, compresslevel=6, mtime=0)).decode()}"' for data in packed)
         script = (Path(VIEWER_ROOT) / "main.min.js").read_text(encoding="utf-8")
-        return _HTML.format(title=self.title, mainminjs=script, commands="".join(commands))
+        return _HTML.format(title=self.title, mainminjs=script, commands=commands)
 
     def close(self) -> None:
         """Nothing to release (no server); present so ``Visualizer.close()`` works."""
