@@ -105,6 +105,6 @@ def test_a_refused_value_names_the_flag(capsys: pytest.CaptureFixture[str]) -> N
 
 
 def test_field_help_reads_google_style_attributes() -> None:
-    assert field_help(LearningConfig, "value_steps").startswith("Adam steps of cloning and of the value warm-up")
+    assert field_help(LearningConfig, "value_steps").startswith("Adam steps of the value network's warm-up")
     assert "rad/s" in field_help(LearningConfig, "action_std")
     assert field_help(LearningConfig, "no_such_field") == ""

@@ -60,25 +60,28 @@ class LearningConfig:
             world; the 3D world's preset (:data:`toolimit.pipeline.settings.WORLD_PRESETS`) gives
             1.5 M (the Panda spade's training success climbs from 0.03 to 1.0 by 1.2 M).
         envs: B, instances stepped together.
-        preset: a key of :data:`toolimit.learn.ppo.PRESETS`.
-        clone: initialise by behaviour cloning (False: the sparse-reward baseline, learned std).
+        preset: PPO settings: the authors' or the project's looser gradient clip (a key of
+            :data:`toolimit.learn.ppo.PRESETS`).
+        clone: behaviour cloning before PPO (without it: PPO from a random policy with a learned std, the
+            sparse-reward baseline).
         clone_rollouts: tracking-controller rollouts to clone (1 = the authors' single rollout).
         clone_noise: std of the action noise of rollouts 2.. (fraction of the velocity limit), each
             noisy state relabelled with the controller's action.
-        clone_steps, value_steps: Adam steps of cloning and of the value warm-up.
+        clone_steps: Adam steps of cloning.
+        value_steps: Adam steps of the value network's warm-up after cloning.
         action_std: the policy's standard deviation on every joint, rad/s (fixed after cloning,
             the start of the learned one without).
         checkpoint_every: updates between checkpoints.
         seed: seeds everything (environments, torch, PPO).
         scene_kwargs: the scene's constructor arguments.
-        reward: ``"sparse"`` (the paper's goal reward) or ``"dense"`` (plus the appendix's shaping:
-            the dense-reward baseline); :data:`toolimit.learn.simulator.REWARDS`.
+        reward: sparse (the paper's goal reward) or dense (plus the appendix's shaping: the
+            dense-reward baseline); :data:`toolimit.learn.simulator.REWARDS`.
         torch_threads: torch's intra-op threads while learning. One by default: the networks are
             small, and with two threads on a two-core machine that also simulates, a cloning step
             of 512 pairs took 176 ms instead of 11 ms (measured, other core busy).
         adr: domain randomisation of the goal box (spades, :mod:`toolimit.learn.adr`): the box is
             observed, cloned at the aligned position, then moved by the boundary tests.
-        adr_every: PPO updates between two boundary tests (:data:`toolimit.learn.adr.EVERY`).
+        adr_every: PPO updates between two boundary tests of ADR.
     """
 
     timesteps: int = 300_000

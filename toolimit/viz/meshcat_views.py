@@ -125,7 +125,9 @@ class StaticViewerWindow:
                 packed.append(node.transform)
             if node.animation is not None:
                 packed.append(node.animation)
-        commands = ",\n".join(f'"{base64.b64encode(gzip.compress(data, compresslevel=6, mtime=0)).decode()}"' for data in packed)
+        commands = ",\n".join(
+            f'"{base64.b64encode(gzip.compress(data, compresslevel=6, mtime=0)).decode()}"' for data in packed
+        )
         script = (Path(VIEWER_ROOT) / "main.min.js").read_text(encoding="utf-8")
         return _HTML.format(title=self.title, mainminjs=script, commands=commands)
 
