@@ -25,7 +25,7 @@ from toolimit.cli.flags import Flag, add_flags, apply_flags
 from toolimit.pipeline.settings import EvaluationSettings
 
 if TYPE_CHECKING:
-    from toolimit.learn.task import LearningTask
+    from toolimit.pipeline.stages import PolicyEvaluation
 
 #: Every flag of ``toolimit evaluate`` built from its settings.
 EVALUATION_FLAGS = (Flag("episodes"), Flag("seed"))
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     evaluation = evaluate_stage(args.policy, settings)
     record = evaluation.record
     if args.heat_map is not None:
-        record["heat_map"] = _heat_map(args, evaluation.task, settings.seed)
+        record["heat_map"] = _heat_map(args, evaluation, settings.seed)
     save_json(out, record)
     print(
         f"success rate {record['success_rate']:.2f} (deterministic), {record['stochastic']['success_rate']:.2f} "
@@ -73,16 +73,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _heat_map(args: argparse.Namespace, task: LearningTask, seed: int) -> dict:
+def _heat_map(args: argparse.Namespace, evaluation: PolicyEvaluation, seed: int) -> dict:
     """Compute the heat map of ``args.policy``, write its SVG (and rerun recording); its record."""
     from toolimit.artifacts import save_text
     from toolimit.learn.heat_map import goal_box_heat_map
-    from toolimit.learn.training import load_policy
     from toolimit.viz.rerun_heat_map import save_heat_map_recording
     from toolimit.viz.svg_heat_map import heat_map_svg
 
-    model, _ = load_policy(args.policy)
-    heat_map = goal_box_heat_map(model, task, grid=args.grid, seed=seed)
+    task = evaluation.task
+    heat_map = goal_box_heat_map(evaluation.model, task, grid=args.grid, seed=seed)
     kind = "learned with ADR" if heat_map.observes_box else "learned without ADR (the box is not observed)"
     save_text(args.heat_map, heat_map_svg(heat_map, f"{task.robot} {task.tool} ({task.world}), policy {kind}"))
     if args.rerun is not None:

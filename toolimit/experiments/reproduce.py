@@ -147,9 +147,8 @@ def reproduce_experiment(
         return 0
     settings = chosen.settings(experiment.world, seed)
     method_dir = folder / "method"
-    started = time.perf_counter()
     try:
-        run_pipeline(
+        pipeline = run_pipeline(
             experiment.demo,
             method_dir,
             experiment.tool,
@@ -162,7 +161,6 @@ def reproduce_experiment(
     except StageFoundNothing as nothing:
         say(experiment.name, f"the pipeline found nothing, no cells for this experiment: {nothing}")
         return 1
-    pipeline_time = time.perf_counter() - started
     task = LearningTask.load(method_dir / "learning" / TASK_NPZ)
     episodes, evaluation_seed = settings.evaluation.episodes, settings.evaluation.seed
     code = 0
@@ -173,7 +171,7 @@ def reproduce_experiment(
             cell = measure_trajopt(experiment, task, episodes, evaluation_seed)
         elif method == "final":
             cell = measure_policy(experiment, method, method_dir / "learning", episodes, evaluation_seed)
-            cell = dataclasses.replace(cell, wall_time_s=_pipeline_wall_time(method_dir, pipeline_time))
+            cell = dataclasses.replace(cell, wall_time_s=pipeline.evaluation["wall_time_s"])
         else:
             learning = folder / method / "learning" if method == "lfd" else folder / method
             if method == "lfd":
@@ -199,16 +197,6 @@ def reproduce_experiment(
         save_json(cells_dir / f"{experiment.cell_key(method)}.json", cell.record())
         say(experiment.name, f"{method}: goal reward {cell.goal_reward:.1f}, success {cell.success_rate:.2f}")
     return code
-
-
-def _pipeline_wall_time(method_dir: Path, fallback: float) -> float:
-    """The pipeline's wall time over every call (its evaluation record), else ``fallback`` seconds."""
-    import json
-
-    from toolimit.pipeline.stages import EVALUATION_JSON
-
-    path = method_dir / EVALUATION_JSON
-    return float(json.loads(path.read_text())["wall_time_s"]) if path.is_file() else fallback
 
 
 def _run_children(

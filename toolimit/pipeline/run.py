@@ -118,8 +118,8 @@ def run_pipeline(
             made = timed(stage, lambda: trajopt_stage(alignment, robot, trajectory, settings.trajopt, progress, tool))
             lines = describe_trajectory(made)
         else:
-            timed(stage, lambda: learn_stage(alignment, trajectory, learning, settings.learning, progress))
-            record = learning_record(learning)
+            outcome = timed(stage, lambda: learn_stage(alignment, trajectory, learning, settings.learning, progress))
+            record = outcome.record
             lines = [
                 f"{record['env_steps']} env steps ({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s"
             ]

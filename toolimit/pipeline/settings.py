@@ -3,9 +3,8 @@
 A stage's settings hold the library's defaults by reference (``AlignmentConfig``,
 ``TrackingWeights``, ``TrackOptions``, ``LearningConfig`` and the export's constants are the one
 place each number is written); where a world needs its own value, :data:`WORLD_PRESETS` holds it,
-and :data:`QUICK` the tiny budgets of a first try or CI. The command line's flags are built from
-these fields (:mod:`toolimit.cli.flags`), so ``toolimit run``, the stage commands and a Python
-caller start from the same values.
+and :data:`QUICK` the tiny budgets of a first try or CI. The ``toolimit`` command's flags are
+built from these fields, so the command and a Python caller start from the same values.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.align.outputs import ALIGNMENT_JSON, CHECKPOINT_JSON, write_alignment
 from toolimit.align.search import AlignmentResult, align
@@ -142,7 +143,6 @@ def trajopt_stage(
     if tool is not None and tool != aligned_tool:
         raise InputError(f"the alignment in {alignment} is for the {aligned_tool}, not the {tool}")
     robot_model = make_robot(robot, tool=aligned_tool)
-    options = settings.track_options(progress=progress and not settings.select_by_robot)
     selection = None
     if settings.select_by_robot:
         selection = select_by_robot_execution(
@@ -150,7 +150,7 @@ def trajopt_stage(
             candidates,
             aligned_tool,
             world,
-            options,
+            settings.track_options(),  # no bar per tracking: the selection shows one over the candidates
             seed=settings.seed,
             progress=progress,
             time_scales=settings.time_scales,
@@ -246,11 +246,13 @@ class PolicyEvaluation:
             rollouts' ``success_rate``, ``goal_reward_mean``, ``goal_reward``, ``episodes``, and the
             stochastic ones under ``stochastic``.
         deterministic: the deterministic rollouts (their joints feed the export).
+        model: the policy evaluated (SB3 model).
         task: the policy's task.
     """
 
     record: dict[str, Any]
     deterministic: Evaluation
+    model: BaseAlgorithm
     task: LearningTask
 
 
@@ -268,7 +270,7 @@ def evaluate_stage(policy: str | Path, settings: EvaluationSettings = Evaluation
         **deterministic.record(),
         "stochastic": stochastic.record(),
     }
-    return PolicyEvaluation(record, deterministic, task)
+    return PolicyEvaluation(record, deterministic, model, task)
 
 
 def export_stage(

@@ -16,8 +16,8 @@ also earns less (8.2 at real time, 3.2 at scale 5: a slowed throw falls short of
 20 candidates of ``spade_00`` (seed 0), 5 keep real time (among them the best: 9.7 spheres, 4.6 at
 scale 1.5), 10 keep 1.5 and 4 keep 2. The replay's reward says nothing of what a policy can learn
 from the trajectory: a slowed one doubles the episode, in which PPO's exploration noise loses the
-sand, so ``toolimit run`` selects at real time in 3D (measurements at
-:data:`toolimit.cli.run.SELECTION_TIME_SCALES`).
+sand, so the pipeline selects at real time (measurements at
+:class:`toolimit.pipeline.settings.TrajoptSettings`, ``time_scales``).
 """
 
 from __future__ import annotations
