@@ -11,7 +11,7 @@ The ratio training / ceiling says how much the simulation costs on top of the le
 Both are timed after one untimed warm-up update each (PPO's set-up, torch's first calls),
 ``--repeats`` times, interleaved, and the fastest run of each is kept (the machine is shared). The
 time split comes from a timing wrapper around the VecEnv (simulation: inside ``reset``/``step``,
-IPC included with ``--workers``), the rollout callbacks (policy inference and buffer: the rest of
+the wait for the second process included), the rollout callbacks (policy inference and buffer: the rest of
 the rollout collection) and the remainder (``train()``: the gradient updates).
 
 Options explored (see the figures in the lead's closing note of issue 10):
@@ -19,11 +19,11 @@ Options explored (see the figures in the lead's closing note of issue 10):
 other jobs, torch's default of one thread per core was 4-9x slower for these small networks, the
 ceiling included; with a core free, 2 threads were 1.3x (training) to 1.5x (ceiling) faster for
 1.5-1.7x the CPU, which lowers the ratio: the simulation is single-threaded);
-``--workers K`` splits the B instances over K spawned processes, each a batched VecEnv of B / K
-instances (a second core for the physics while the main process waits); their streams differ from
-the single-process ones (seed + k per worker), which is fine for a speed figure. Measured on the
-Panda hammer (B = 16): no faster than one process (the pipes and pickled infos cost what the
-parallel halves save), so the library's single-process VecEnv stays the default.
+``--processes K`` steps the B instances in K processes, the library's
+:class:`~toolimit.learn.split_simulator.SplitSimulator` (shared buffers, one byte on a pipe per
+step and worker; the same numbers as one process); the default is the library's
+(:func:`~toolimit.learn.split_simulator.simulation_processes`: 2 for 3D tasks on 2+ cores). An
+earlier version of this option (pipes, pickled results per step) was no faster than one process.
 
 Prints steps per second (wall clock; CPU seconds of the main process alongside), the split, writes
 ``benchmarks/results/learning_throughput_<name>.json`` and ends with ``ratio R``. Keep the budget
@@ -31,15 +31,14 @@ small on a shared machine, e.g.:
 
     nice -n 5 python benchmarks/learning_throughput.py                      # the Panda spade (3D)
     nice -n 5 python benchmarks/learning_throughput.py --env toolimit/SpadePlanar-v0 --threads 0
-    nice -n 5 python benchmarks/learning_throughput.py --env toolimit/Hammer3D-v0 --envs 8 --workers 2
+    nice -n 5 python benchmarks/learning_throughput.py --env toolimit/Spade3D-v0 --processes 1
 """
 
 from __future__ import annotations
 
 import argparse
-import multiprocessing as mp
+import os
 import sys
-import tempfile
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -55,6 +54,7 @@ from toolimit.artifacts import save_json
 from toolimit.learn import BatchedTaskVecEnv, LearningTask, TaskSimulator, shipped_task
 from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, action_space, env_id, observation_space
 from toolimit.learn.ppo import PRESETS, make_ppo
+from toolimit.learn.split_simulator import simulation_processes
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results"
@@ -108,58 +108,6 @@ class TrivialVecEnv(VecEnv):
 
     def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
         return [False] * len(self._get_indices(indices))
-
-
-def _worker(connection: Any, task_file: str, num_envs: int, seed: int) -> None:
-    """A spawned process holding one BatchedTaskVecEnv; answers ("reset",) and ("step", actions)."""
-    torch.set_num_threads(1)
-    env = BatchedTaskVecEnv(LearningTask.load(task_file), num_envs, seed=seed)
-    while True:
-        command, payload = connection.recv()
-        if command == "reset":
-            connection.send(env.reset())
-        elif command == "step":
-            connection.send(env.step(payload))
-        else:
-            connection.close()
-            return
-
-
-class SplitTaskVecEnv(TrivialVecEnv):
-    """B instances of a task split over K spawned processes (each a BatchedTaskVecEnv of about B / K)."""
-
-    def __init__(self, task: LearningTask, num_envs: int, workers: int, seed: int, task_file: Path):
-        super().__init__(TaskSimulator(task, 1), num_envs)
-        sizes = [len(part) for part in np.array_split(np.arange(num_envs), workers)]
-        self._bounds = np.cumsum([0, *sizes])
-        context = mp.get_context("spawn")
-        self._connections, self._processes = [], []
-        for k, size in enumerate(sizes):
-            parent, child = context.Pipe()
-            process = context.Process(target=_worker, args=(child, str(task_file), size, seed + k), daemon=True)
-            process.start()
-            self._connections.append(parent)
-            self._processes.append(process)
-
-    def reset(self) -> np.ndarray:
-        for connection in self._connections:
-            connection.send(("reset", None))
-        return np.concatenate([connection.recv() for connection in self._connections])
-
-    def step_async(self, actions: np.ndarray) -> None:
-        for k, connection in enumerate(self._connections):
-            connection.send(("step", actions[self._bounds[k]:self._bounds[k + 1]]))
-
-    def step_wait(self):
-        parts = [connection.recv() for connection in self._connections]
-        observations, rewards, dones, infos = zip(*parts)
-        return (np.concatenate(observations), np.concatenate(rewards), np.concatenate(dones),
-                [info for part in infos for info in part])
-
-    def close(self) -> None:
-        for connection, process in zip(self._connections, self._processes):
-            connection.send(("close", None))
-            process.join(timeout=5)
 
 
 class StepTimer(VecEnvWrapper):
@@ -294,48 +242,46 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=1,
                         help="torch.set_num_threads; 0 keeps torch's default of one per core (default: 1, measured "
                              "fastest)")
-    parser.add_argument("--workers", type=int, default=1,
-                        help="processes the instances are split over (default: 1, the library's VecEnv)")
+    parser.add_argument("--processes", type=int, default=None,
+                        help="processes stepping the instances (default: the library's, 2 for 3D tasks on 2+ cores)")
     parser.add_argument("--repeats", type=int, default=2,
                         help="timed runs of each, interleaved; the fastest of each is kept (default: 2)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
-    if min(args.envs, args.timesteps, args.workers, args.repeats) < 1 or args.threads < 0:
-        sys.exit("--envs, --timesteps, --workers and --repeats must be >= 1, --threads >= 0")
-    if args.workers > args.envs:
-        sys.exit(f"--workers {args.workers}: more processes than instances (--envs {args.envs})")
+    if min(args.envs, args.timesteps, args.repeats) < 1 or args.threads < 0:
+        sys.exit("--envs, --timesteps and --repeats must be >= 1, --threads >= 0")
     if args.threads > 0:
         torch.set_num_threads(args.threads)
     name, task = load_task(args)
+    processes = simulation_processes(args.processes, task.world, args.envs)
+    if not 1 <= processes <= args.envs:
+        sys.exit(f"--processes {processes}: must be in 1..--envs ({args.envs})")
     print(f"{name}: {task.robot} {task.tool} ({task.world}), horizon {task.horizon}, B = {args.envs}, "
-          f"preset {args.preset}, torch threads {torch.get_num_threads()}, workers {args.workers}")
+          f"preset {args.preset}, torch threads {torch.get_num_threads()}, processes {processes}")
 
-    with tempfile.TemporaryDirectory() as folder:
-        if args.workers == 1:
-            env: VecEnv = BatchedTaskVecEnv(task, args.envs, seed=args.seed)
-        else:  # the workers read the task from a file (a spawned process starts from scratch)
-            env = SplitTaskVecEnv(task, args.envs, args.workers, args.seed, task.save(Path(folder) / "task.npz"))
-        try:
-            learners = Learner(env, args.preset, args.seed), \
-                Learner(TrivialVecEnv(TaskSimulator(task, 1), args.envs), args.preset, args.seed)
-            runs: tuple[list[Throughput], list[Throughput]] = ([], [])
-            for _ in range(args.repeats):  # interleaved, so that both see the same load of the machine
-                for learner, timed in zip(learners, runs):
-                    timed.append(learner.time(args.timesteps))
-        finally:
-            env.close()
+    env = BatchedTaskVecEnv(task, args.envs, seed=args.seed, processes=processes)
+    try:
+        learners = Learner(env, args.preset, args.seed), \
+            Learner(TrivialVecEnv(TaskSimulator(task, 1), args.envs), args.preset, args.seed)
+        runs: tuple[list[Throughput], list[Throughput]] = ([], [])
+        for _ in range(args.repeats):  # interleaved, so that both see the same load of the machine
+            for learner, timed in zip(learners, runs):
+                timed.append(learner.time(args.timesteps))
+    finally:
+        env.close()
     training, ceiling = fastest(runs[0]), fastest(runs[1])
     ratio = training.steps_per_s / ceiling.steps_per_s
     cpu_ratio = (training.steps / training.cpu_s) / (ceiling.steps / ceiling.cpu_s)
 
     print(_split("training", training))
     print(_split("ceiling ", ceiling))
-    if args.workers == 1:  # the workers' CPU time is not the main process's
+    if processes == 1:  # the second process's CPU time is not the main process's
         print(f"per CPU second of the main process: training / ceiling = {cpu_ratio:.2f}")
     record = {"name": name, "robot": task.robot, "tool": task.tool, "world": task.world, "horizon": task.horizon,
               "envs": args.envs, "preset": args.preset, "torch_threads": torch.get_num_threads(),
-              "workers": args.workers, "training": training.record(), "ceiling": ceiling.record(), "ratio": ratio,
-              "cpu_ratio": cpu_ratio if args.workers == 1 else None, "repeats": args.repeats}
+              "processes": processes, "training": training.record(), "ceiling": ceiling.record(), "ratio": ratio,
+              "cpu_ratio": cpu_ratio if processes == 1 else None, "repeats": args.repeats,
+              "load_average": list(os.getloadavg())}
     out = RESULTS / f"learning_throughput_{name}.json"
     save_json(out, record)
     print(f"wrote {out.relative_to(REPO)}")

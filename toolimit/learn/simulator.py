@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from toolimit.learn.adr import GOAL_BOX, AdrBounds, goal_box_spec
+from toolimit.learn.batch_part import BatchPart
 from toolimit.learn.task import LearningTask
 from toolimit.robots import make_robot
 from toolimit.rotations import quaternions_wxyz
@@ -72,6 +73,9 @@ class TaskSimulator:
         reward: one of :data:`REWARDS` (see the module docstring).
         adr: randomise the goal box inside ``adr_bounds`` and observe it (module docstring);
             InputError for a scene without a goal box.
+        part: these B instances are a part of a larger batch (:mod:`toolimit.learn.batch_part`):
+            every reset draws for the whole batch and keeps the part's share, so instance i starts
+            alike however the batch is split (3D scenes; ``batch_size`` is then the part's size).
     """
 
     def __init__(
@@ -81,7 +85,10 @@ class TaskSimulator:
         scene_kwargs: dict[str, Any] | None = None,
         reward: str = "sparse",
         adr: bool = False,
+        part: BatchPart | None = None,
     ):
+        if part is not None:
+            batch_size = part.size
         if int(batch_size) < 1:
             raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
         if reward not in REWARDS:
@@ -89,6 +96,7 @@ class TaskSimulator:
         self.reward = reward
         self.task = task
         self.batch_size = int(batch_size)
+        self.part = part or BatchPart.whole(self.batch_size)
         self.robot = make_robot(task.robot, tool=task.tool)
         if tuple(self.robot.joint_names) != tuple(task.joint_names):
             raise ValueError(
@@ -133,18 +141,21 @@ class TaskSimulator:
 
     def reset(self, rng: np.random.Generator, box_positions: np.ndarray | None = None) -> np.ndarray:
         """Start B episodes; returns the observations (B, D). ``box_positions`` (B, 2): the goal
-        boxes' x, y (m, world frame) instead of the ADR draw (the heat map's grid)."""
-        start = self.task.reference_q[0] + rng.normal(0.0, JOINT_NOISE_STD, size=(self.batch_size, self.n_joints))
-        self.q = np.clip(start, self.robot.lower, self.robot.upper)
+        boxes' x, y (m, world frame) instead of the ADR draw (the heat map's grid); of the whole
+        batch if this is a part of one."""
+        part = self.part
+        noise = rng.normal(0.0, JOINT_NOISE_STD, size=(part.total, self.n_joints))
+        self.q = np.clip(self.task.reference_q[0] + part.of(noise), self.robot.lower, self.robot.upper)
         params = self._noisy_params(rng, box_placed=box_positions is not None or self.adr_bounds is not None)
         if box_positions is not None and not all(map(self.box_validity(params), np.reshape(box_positions, (-1, 2)))):
             params = dict(self.task.params)  # the deposit's noise made a given box position invalid
         elif box_positions is None and self.adr_bounds is not None:
-            box_positions = self.adr_bounds.draw(rng, self.batch_size, self.box_validity(params))
+            box_positions = self.adr_bounds.draw(rng, part.total, self.box_validity(params))
         if box_positions is not None:
-            self.box_positions = np.broadcast_to(np.asarray(box_positions, dtype=float), (self.batch_size, 2)).copy()
+            whole = np.broadcast_to(np.asarray(box_positions, dtype=float), (part.total, 2))
+            self.box_positions = part.of(whole).copy()
             params[GOAL_BOX] = self._box_parameter(params)
-        self.scene.reset(params, rng, self.batch_size)
+        self.scene.reset(params, part.generator(rng), self.batch_size)
         self.t = 0
         self._update_tool(first=True)
         return self.observation()
@@ -215,13 +226,15 @@ class TaskSimulator:
         return np.concatenate(parts, axis=1).astype(np.float32)
 
     # ------------------------------------------------------------------------------------ expert
-    def tracking_action(self) -> np.ndarray:
+    def tracking_action(self, q: np.ndarray | None = None) -> np.ndarray:
         """(B, N) the tracking controller's action, the authors' expert for cloning: the velocity
         that reaches the reference's next configuration in one step, (q_ref[t+1] - q_t) / dt,
         as a fraction of the velocity limit and clipped to [-1, 1]; the reference's last
-        configuration is held after its end."""
+        configuration is held after its end. ``q``: joints (M, N) rad at this step instead of the
+        simulator's own (a batch split over processes)."""
         target = self.task.reference_q[min(self.t + 1, self.task.reference_steps)]
-        return np.clip((target - self.q) / (self.dt * self.robot.velocity_limit), -1.0, 1.0)
+        q = self.q if q is None else q
+        return np.clip((target - q) / (self.dt * self.robot.velocity_limit), -1.0, 1.0)
 
 
 def velocity_penalty(velocity: np.ndarray, limit: np.ndarray) -> np.ndarray:

@@ -41,6 +41,7 @@ from toolimit.learn.ppo import (
     train,
 )
 from toolimit.learn.simulator import REWARDS
+from toolimit.learn.split_simulator import simulation_processes
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 from toolimit.progress import tqdm
@@ -82,6 +83,9 @@ class LearningConfig:
         adr: domain randomisation of the goal box (spades, :mod:`toolimit.learn.adr`): the box is
             observed, cloned at the aligned position, then moved by the boundary tests.
         adr_every: PPO updates between two boundary tests of ADR.
+        sim_processes: processes stepping the B instances (a second core for the physics, no
+            change to the numbers; :mod:`toolimit.learn.split_simulator`). None: two for a 3D task
+            on a machine with two cores or more, else one.
     """
 
     timesteps: int = 300_000
@@ -100,6 +104,7 @@ class LearningConfig:
     torch_threads: int = 1
     adr: bool = False
     adr_every: int = ADR_EVERY
+    sim_processes: int | None = None
 
     def __post_init__(self) -> None:
         """InvalidLearningConfig, naming the field, for a value no run can use: refused here, before
@@ -122,6 +127,10 @@ class LearningConfig:
             raise InvalidLearningConfig("clone_noise", f"must be a finite number >= 0, got {self.clone_noise!r}")
         if not 0.0 < self.action_std < float("inf"):
             raise InvalidLearningConfig("action_std", f"must be a finite number > 0 (rad/s), got {self.action_std!r}")
+        if self.sim_processes is not None and not 1 <= self.sim_processes <= self.envs:
+            raise InvalidLearningConfig(
+                "sim_processes", f"must be None or in 1..envs ({self.envs}), got {self.sim_processes!r}"
+            )
         if self.preset not in PRESETS:
             raise InvalidLearningConfig("preset", f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
         if self.reward not in REWARDS:
@@ -234,8 +243,15 @@ def _learn_policy(
         goal_box_spec(make_scene(task.tool, task.world))
     torch.manual_seed(config.seed)
     task.save(out_dir / TASK_NPZ)
+    processes = simulation_processes(config.sim_processes, task.world, config.envs)
     env = BatchedTaskVecEnv(
-        task, config.envs, seed=config.seed, scene_kwargs=config.scene_kwargs, reward=config.reward, adr=config.adr
+        task,
+        config.envs,
+        seed=config.seed,
+        scene_kwargs=config.scene_kwargs,
+        reward=config.reward,
+        adr=config.adr,
+        processes=processes,
     )
     cloning_record: dict[str, Any] = {}
 
@@ -253,7 +269,10 @@ def _learn_policy(
     callbacks: list[BaseCallback] = [_Curve(curve, config.timesteps, on_record, progress)]
     if config.adr:  # after the curve: a line holds the bounds its episodes were drawn in
         callbacks.append(AdrCallback(env, config.adr_every))
-    train(model, config.timesteps, out_dir, config.checkpoint_every, callbacks)
+    try:
+        train(model, config.timesteps, out_dir, config.checkpoint_every, callbacks)
+    finally:
+        env.close()  # ends the simulation's worker processes (multiprocessing's exit hook, if earlier)
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
     simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s

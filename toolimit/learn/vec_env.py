@@ -12,6 +12,10 @@ SB3's Monitor writes it, so that PPO logs returns and success rates). ``TimeLimi
 False: the time is part of the observation and nothing happens after H, so the value of the last
 state is zero and PPO must not bootstrap past it (a finite-horizon task, as the authors trained it).
 
+With ``processes`` > 1 the B instances are stepped by that many processes at once, each a part of
+the batch (:class:`~toolimit.learn.split_simulator.SplitSimulator`: shared buffers, no pickling
+per step; 3D scenes); the numbers are those of one process. ``close`` ends the worker processes.
+
 With ``adr=True`` each instance's goal box is drawn inside the ADR bounds at every reset (one
 position per instance) and observed; ``adr`` holds the bounds and the boundary tests' generator
 (:class:`toolimit.learn.adr.AdrState`, seeded from ``seed``), which checkpoints save.
@@ -30,6 +34,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices
 from toolimit.learn.adr import ADR_STREAM, AdrState
 from toolimit.learn.env import action_space, observation_space
 from toolimit.learn.simulator import TaskSimulator
+from toolimit.learn.split_simulator import SplitSimulator
 from toolimit.learn.task import LearningTask
 
 
@@ -43,6 +48,7 @@ class BatchedTaskVecEnv(VecEnv):
         scene_kwargs: keyword arguments of the scene's constructor.
         reward: ``"sparse"`` or ``"dense"`` (:data:`toolimit.learn.simulator.REWARDS`).
         adr: domain randomisation of the goal box (module docstring).
+        processes: processes stepping the instances (module docstring).
     """
 
     def __init__(
@@ -53,13 +59,19 @@ class BatchedTaskVecEnv(VecEnv):
         scene_kwargs: dict[str, Any] | None = None,
         reward: str = "sparse",
         adr: bool = False,
+        processes: int = 1,
     ):
-        self.simulator = TaskSimulator(task, batch_size=num_envs, scene_kwargs=scene_kwargs, reward=reward, adr=adr)
+        self.simulator: TaskSimulator | SplitSimulator = (
+            TaskSimulator(task, batch_size=num_envs, scene_kwargs=scene_kwargs, reward=reward, adr=adr)
+            if processes == 1
+            else SplitSimulator(task, num_envs, processes, scene_kwargs=scene_kwargs, reward=reward, adr=adr)
+        )
         bounds = self.simulator.adr_bounds
         self.adr = None if bounds is None else AdrState(bounds, np.random.default_rng([seed, ADR_STREAM]))
         self.task = task
         self.render_mode = None
-        super().__init__(num_envs, observation_space(self.simulator), action_space(self.simulator))
+        spaces = self.simulator if isinstance(self.simulator, TaskSimulator) else self.simulator.local
+        super().__init__(num_envs, observation_space(spaces), action_space(spaces))
         self._rng = np.random.default_rng(seed)
         #: The generator's state just before the latest reset (a checkpoint restores it).
         self.rng_state_at_reset: Mapping[str, Any] = self._rng.bit_generator.state
@@ -95,10 +107,11 @@ class BatchedTaskVecEnv(VecEnv):
         if done:
             success = self.simulator.is_success()
             elapsed = time.perf_counter() - self._episode_start
+            joints = self.simulator.q.copy()
             for i, info in enumerate(infos):
                 info.update(
                     terminal_observation=observations[i],
-                    terminal_joints=self.simulator.q[i].copy(),
+                    terminal_joints=joints[i],
                     is_success=bool(success[i]),
                     episode={"r": float(self._returns[i]), "l": self.simulator.t, "t": elapsed},
                     **{"TimeLimit.truncated": False},
@@ -116,7 +129,8 @@ class BatchedTaskVecEnv(VecEnv):
         return self.simulator.tracking_action()
 
     def close(self) -> None:
-        pass
+        if isinstance(self.simulator, SplitSimulator):
+            self.simulator.close()
 
     # SB3's attribute access: every instance shares this object's attributes.
     def _count(self, indices: VecEnvIndices) -> int:

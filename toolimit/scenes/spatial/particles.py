@@ -304,10 +304,13 @@ class ParticleWorld:
         return self._pairs[instance, : max(int(self._n_pairs[instance]), 0)].copy()
 
     def _grow_pairs(self) -> None:
-        """Double the Verlet lists' capacity (a kernel found them too small); all are rebuilt."""
+        """Double the Verlet lists' capacity (a kernel found one too small: its instance, marked -1,
+        is rebuilt). The other instances keep their lists as they are, so that an instance's
+        physics does not depend on the others in its batch (nor on how a batch is split)."""
         b, capacity, _ = self._pairs.shape
-        self._pairs = np.zeros((b, 2 * capacity, 2), dtype=np.int64)
-        self._n_pairs[:] = -1
+        grown = np.zeros((b, 2 * capacity, 2), dtype=np.int64)
+        grown[:, :capacity] = self._pairs
+        self._pairs = grown
 
     def update_pairs(self) -> None:
         """Bring the Verlet lists up to date (the solver does it at every sub-step)."""
@@ -318,7 +321,7 @@ class ParticleWorld:
     def place_tool(self, position: np.ndarray, rotation: np.ndarray, iterations: int = 20) -> None:
         """Put the tool at (B, 3), (B, 3, 3) without velocity.
 
-        If the tool overlaps spheres, they are moved out of it (a centre inside a box leaves through
+        In each instance where the tool overlaps spheres, they are moved out of it (a centre inside a box leaves through
         the nearest face), and the overlaps this makes are relaxed by ``iterations`` position-only
         passes over all contacts (the pre-stabilisation of Macklin et al.): positions change,
         velocities do not, as if the spheres had been there before. Static surfaces win here too.
@@ -329,14 +332,16 @@ class ParticleWorld:
             return
         local = (self.positions - self.tool_position[:, None]) @ self.tool_rotation
         low, high = self._tool_arrays[-2:]
-        if not np.any(np.all((local > low) & (local < high), axis=-1)):
+        touched = np.any(np.all((local > low) & (local < high), axis=-1), axis=1)  # (B,)
+        if not np.any(touched):
             return  # nothing near the tool: leave the spheres exactly where they are
-        self._resting[:] = 0
+        self._resting[touched] = 0  # the other instances' spheres stay exactly where they are
         while not kernels.place(
             self.positions,
             self._built_at,
             self._pairs,
             self._n_pairs,
+            touched,
             int(iterations),
             self.tool_position,
             self.tool_rotation,

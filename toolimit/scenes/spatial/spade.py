@@ -243,6 +243,7 @@ class SpatialSpadeScene(SceneBase):
         self.walls = StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
         self.success_tracker = SuccessTracker(0)
         self._world: ParticleWorld | None = None
+        self._goal_reward: np.ndarray | None = None  # (B,) of the current state, once counted
 
     # ------------------------------------------------------------------------------- parameters
     def footprints(self, params: SceneParams) -> np.ndarray:
@@ -294,6 +295,7 @@ class SpatialSpadeScene(SceneBase):
         shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
         self._world = ParticleWorld(self.material, self.walls, self.shapes)
         self._world.reset(self.sand_position + (heap + shift) @ deposit_rotation.T)
+        self._goal_reward = None
         #: Steps that ended with >= SUCCESS_SPHERES in the box.
         self.success_tracker = SuccessTracker(b)
 
@@ -309,6 +311,7 @@ class SpatialSpadeScene(SceneBase):
         """
         world = self._require_reset()
         position, rotation = batched_pose(tool_pose, self.batch_size)
+        self._goal_reward = None
         if world.tool_position is None:
             world.place_tool(position, rotation)
             world.advance(self.control_dt, self.substeps)
@@ -379,8 +382,11 @@ class SpatialSpadeScene(SceneBase):
         return np.maximum(deepest.max(axis=1), 0.0)
 
     def goal_reward(self) -> np.ndarray:
-        """(B,) number of spheres in the goal box."""
-        return np.sum(self.spheres_in_box(), axis=1).astype(float)
+        """(B,) number of spheres in the goal box (counted once per state: the step's success
+        record and the learner both ask)."""
+        if self._goal_reward is None:
+            self._goal_reward = np.sum(self.spheres_in_box(), axis=1).astype(float)
+        return self._goal_reward.copy()
 
     def dense_reward(self) -> np.ndarray:
         """(B,) the paper appendix's shaping: sand close to the box, spade close to the deposit

@@ -1,0 +1,138 @@
+"""The batch split over processes: the same rollout as one process, refusal where it cannot hold, a clean stop."""
+
+from __future__ import annotations
+
+import glob
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from toolimit.learn import BatchedTaskVecEnv, shipped_task
+from toolimit.learn.batch_part import BatchPart
+from toolimit.learn.split_simulator import SHARED_DIR, simulation_processes
+
+#: A small sand scene: the split's bookkeeping, not the physics, is under test.
+FEW_SPHERES = {"n_spheres": 40}
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def spade_3d():
+    return shipped_task("spade", "3d")
+
+
+def rollout(task, processes: int, steps: int) -> tuple[np.ndarray, ...]:
+    """Observations, rewards and terminal infos of ``steps`` noisy tracking steps of B = 3 (a reset
+    at the horizon included)."""
+    env = BatchedTaskVecEnv(task, 3, seed=5, scene_kwargs=FEW_SPHERES, processes=processes)
+    rng = np.random.default_rng(1)
+    try:
+        observations, rewards, terminal = [env.reset()], [], []
+        for _ in range(steps):
+            action = env.tracking_action() + rng.normal(0.0, 0.1, (3, env.simulator.n_joints))
+            observation, reward, done, infos = env.step(action)
+            observations.append(observation)
+            rewards.append(reward)
+            if done[0]:
+                terminal = [(info["is_success"], info["goal_reward"], info["terminal_joints"]) for info in infos]
+        return np.array(observations), np.array(rewards), np.array([t[:2] for t in terminal]), env.simulator.q
+    finally:
+        env.close()
+
+
+def test_two_and_three_processes_give_the_one_process_rollout(spade_3d):
+    steps = spade_3d.horizon + 5  # through an episode's end and the reset after it
+    one = rollout(spade_3d, 1, steps)
+    for processes in (2, 3):
+        split = rollout(spade_3d, processes, steps)
+        for a, b in zip(one, split):
+            np.testing.assert_allclose(b, a, rtol=0, atol=1e-9)
+    assert np.ptp(one[0][:, :, 0]) > 0.05  # the tool moved: the rollout is not trivially equal
+
+
+def test_parts_cover_the_batch_in_order():
+    parts = BatchPart.split(5, 2)
+    assert [(p.start, p.stop, p.total) for p in parts] == [(0, 3, 5), (3, 5, 5)]
+    assert BatchPart.whole(4).is_whole and not parts[1].is_whole
+    with pytest.raises(ValueError, match="start < stop"):
+        BatchPart(2, 2, 4)
+
+
+def test_a_scene_drawing_instance_by_instance_is_refused(spade_task):
+    env = BatchedTaskVecEnv(spade_task, 2, seed=0, processes=2)  # the planar spade
+    try:
+        with pytest.raises(ValueError, match="cannot be split over processes"):
+            env.reset()
+    finally:
+        env.close()
+
+
+def test_default_is_two_processes_for_3d_on_two_cores(monkeypatch):
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    assert simulation_processes(None, "3d", 16) == 2
+    assert simulation_processes(None, "planar", 16) == 1
+    assert simulation_processes(None, "3d", 1) == 1
+    assert simulation_processes(3, "planar", 16) == 3
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    assert simulation_processes(None, "3d", 16) == 1
+
+
+STEPPING = textwrap.dedent(
+    """
+    import os, sys
+    from multiprocessing import resource_tracker
+    import numpy as np
+    from toolimit.learn import BatchedTaskVecEnv, shipped_task
+    if __name__ == "__main__":
+        env = BatchedTaskVecEnv(shipped_task("spade", "3d"), 2, seed=0, scene_kwargs={"n_spheres": 20}, processes=2)
+        env.reset()
+        worker = env.simulator._processes[0].pid
+        print(worker, resource_tracker._resource_tracker._pid, flush=True)
+        while True:
+            env.step(np.zeros((2, env.simulator.n_joints)))
+    """
+)
+
+
+def alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie, ended but not yet reaped by its parent, does not)."""
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) or SIGTERM to the main
+    process: the worker and multiprocessing's resource tracker end within 0.5 s of the main
+    process, and the shared buffer's file is gone."""
+    environment = {**os.environ, "PYTHONPATH": str(REPO)}
+    main = subprocess.Popen(
+        [sys.executable, "-c", STEPPING], stdout=subprocess.PIPE, text=True, env=environment, start_new_session=True
+    )
+    try:
+        children = [int(pid) for pid in main.stdout.readline().split()]  # type: ignore[union-attr]
+        assert len(children) == 2 and all(alive(pid) for pid in children)
+        time.sleep(0.2)  # stepping
+        if signum == signal.SIGINT:
+            os.killpg(main.pid, signum)
+        else:
+            main.send_signal(signum)
+        main.wait(timeout=10)
+        ended = time.monotonic()
+        while any(alive(pid) for pid in children) and time.monotonic() - ended < 0.5:
+            time.sleep(0.01)
+        assert not [pid for pid in children if alive(pid)], "a child outlived the main process by 0.5 s"
+        assert not glob.glob(os.path.join(SHARED_DIR, f"toolimit-{main.pid}-*"))
+    finally:
+        if main.poll() is None:
+            main.kill()
