@@ -21,9 +21,9 @@ ceiling included; with a core free, 2 threads were 1.3x (training) to 1.5x (ceil
 1.5-1.7x the CPU, which lowers the ratio: the simulation is single-threaded);
 ``--processes K`` steps the B instances in K processes, the library's
 :class:`~toolimit.learn.split_simulator.SplitSimulator` (shared buffers, one byte on a pipe per
-step and worker; the same numbers as one process); the default is the library's
-(:func:`~toolimit.learn.split_simulator.simulation_processes`: 2 for 3D tasks on 2+ cores). An
-earlier version of this option (pipes, pickled results per step) was no faster than one process.
+step and worker; the same numbers as one process): on the Panda spade, 5,294 against 5,853
+steps/s for one process with the second core busy with other jobs (load average about 3); an
+earlier version of this option (pipes, pickled results per step) was no faster either.
 
 Prints steps per second (wall clock; CPU seconds of the main process alongside), the split, writes
 ``benchmarks/results/learning_throughput_<name>.json`` and ends with ``ratio R``. Keep the budget
@@ -54,7 +54,6 @@ from toolimit.artifacts import save_json
 from toolimit.learn import BatchedTaskVecEnv, LearningTask, TaskSimulator, shipped_task
 from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, action_space, env_id, observation_space
 from toolimit.learn.ppo import PRESETS, make_ppo
-from toolimit.learn.split_simulator import simulation_processes
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results"
@@ -242,8 +241,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=1,
                         help="torch.set_num_threads; 0 keeps torch's default of one per core (default: 1, measured "
                              "fastest)")
-    parser.add_argument("--processes", type=int, default=None,
-                        help="processes stepping the instances (default: the library's, 2 for 3D tasks on 2+ cores)")
+    parser.add_argument("--processes", type=int, default=1,
+                        help="processes stepping the instances (default: 1, the library's default)")
     parser.add_argument("--repeats", type=int, default=2,
                         help="timed runs of each, interleaved; the fastest of each is kept (default: 2)")
     parser.add_argument("--seed", type=int, default=0)
@@ -253,7 +252,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.threads > 0:
         torch.set_num_threads(args.threads)
     name, task = load_task(args)
-    processes = simulation_processes(args.processes, task.world, args.envs)
+    processes = args.processes
     if not 1 <= processes <= args.envs:
         sys.exit(f"--processes {processes}: must be in 1..--envs ({args.envs})")
     print(f"{name}: {task.robot} {task.tool} ({task.world}), horizon {task.horizon}, B = {args.envs}, "

@@ -16,7 +16,7 @@ import pytest
 
 from toolimit.learn import BatchedTaskVecEnv, shipped_task
 from toolimit.learn.batch_part import BatchPart
-from toolimit.learn.split_simulator import SHARED_DIR, simulation_processes
+from toolimit.learn.split_simulator import SHARED_DIR
 
 #: A small sand scene: the split's bookkeeping, not the physics, is under test.
 FEW_SPHERES = {"n_spheres": 40}
@@ -72,16 +72,6 @@ def test_a_scene_drawing_instance_by_instance_is_refused(spade_task):
             env.reset()
     finally:
         env.close()
-
-
-def test_default_is_two_processes_for_3d_on_two_cores(monkeypatch):
-    monkeypatch.setattr(os, "cpu_count", lambda: 2)
-    assert simulation_processes(None, "3d", 16) == 2
-    assert simulation_processes(None, "planar", 16) == 1
-    assert simulation_processes(None, "3d", 1) == 1
-    assert simulation_processes(3, "planar", 16) == 3
-    monkeypatch.setattr(os, "cpu_count", lambda: 1)
-    assert simulation_processes(None, "3d", 16) == 1
 
 
 STEPPING = textwrap.dedent(

@@ -187,3 +187,32 @@ def test_verlet_lists_always_hold_every_touching_pair() -> None:
             gaps = np.linalg.norm(p[:, None] - p[None], axis=-1)
             for i, j in zip(*np.nonzero(np.triu(gaps < 2 * R, 1))):
                 assert (i, j) in listed, f"touching pair ({i}, {j}) missing at step {k}"
+
+
+def test_the_tools_far_bound_never_hides_a_sphere_it_reaches():
+    """The cheap bound on the whole sand that spares the per-sphere tool test of frozen instances
+    gives the per-sphere test's answer (random clouds and tool moves, near and far)."""
+    from scipy.spatial.transform import Rotation
+
+    from toolimit.scenes.spatial import particle_kernels as kernels
+
+    world = ParticleWorld(MATERIAL, None, tool_shapes("spade"))
+    low, high = world._tool_arrays[-2:]
+    rng = np.random.default_rng(0)
+    start, end = np.empty(3), np.empty(3)
+    answers = set()
+    for _ in range(300):
+        positions = rng.normal(0.0, 0.05, (1, 30, 3)) + np.array([0.0, 0.0, 0.1])
+        p0 = rng.normal(0.0, 0.4, (1, 3))
+        p1 = p0 + rng.normal(0.0, 0.02, (1, 3))
+        r0 = Rotation.random(random_state=rng).as_matrix()[None]
+        r1 = (Rotation.from_rotvec(rng.normal(0.0, 0.05, 3)) * Rotation.from_matrix(r0[0])).as_matrix()[None]
+        every = any(
+            not kernels._in_tool_frame(0, i, positions, positions, p0, r0, p1, r1, low, high, start, end)
+            for i in range(30)
+        )
+        far = kernels._tool_far(0, positions, p0, r0, p1, r1, low, high)
+        assert not (far and every)
+        assert kernels._tool_reaches(0, positions, p0, r0, p1, r1, low, high) == every
+        answers.add((far, every))
+    assert {(True, False), (False, True), (False, False)} <= answers  # both ways, and the bound's slack

@@ -45,7 +45,7 @@ LEARNING_FLAGS = (
     Flag("reward", choices=REWARDS),
     Flag("adr"),
     Flag("adr_every"),
-    Flag("sim_processes", show=lambda value: "2 for 3D tasks on 2+ cores, else 1" if value is None else str(value)),
+    Flag("sim_processes"),
     Flag("checkpoint_every"),
     Flag("seed"),
 )

@@ -48,15 +48,6 @@ QUIT_WAIT_S, TERMINATE_WAIT_S = 0.3, 0.2
 SHARED_DIR = "/dev/shm" if os.path.isdir("/dev/shm") else tempfile.gettempdir()
 
 
-def simulation_processes(requested: int | None, world: str, batch_size: int) -> int:
-    """``requested`` processes, or by default two for a 3D task of two instances or more on a
-    machine with two cores or more (measured faster: benchmarks/learning_throughput.py), else one
-    (the planar scenes cannot be split, and a process of their own gains them little)."""
-    if requested is not None:
-        return requested
-    return 2 if world == "3d" and batch_size >= 2 and (os.cpu_count() or 1) >= 2 else 1
-
-
 class SharedBuffers:
     """A part's per-step arrays, in one float64 matrix mapped from a file both processes open.
 

@@ -41,7 +41,6 @@ from toolimit.learn.ppo import (
     train,
 )
 from toolimit.learn.simulator import REWARDS
-from toolimit.learn.split_simulator import simulation_processes
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 from toolimit.progress import tqdm
@@ -83,9 +82,10 @@ class LearningConfig:
         adr: domain randomisation of the goal box (spades, :mod:`toolimit.learn.adr`): the box is
             observed, cloned at the aligned position, then moved by the boundary tests.
         adr_every: PPO updates between two boundary tests of ADR.
-        sim_processes: processes stepping the B instances (a second core for the physics, no
-            change to the numbers; :mod:`toolimit.learn.split_simulator`). None: two for a 3D task
-            on a machine with two cores or more, else one.
+        sim_processes: processes stepping the B instances (3D tasks; the same numbers whatever
+            their count, :mod:`toolimit.learn.split_simulator`). One by default: two were slower
+            on the Panda spade while other jobs kept the second core busy (5,294 against 5,853
+            steps/s, benchmarks/learning_throughput.py, load average about 3 on two cores).
     """
 
     timesteps: int = 300_000
@@ -104,7 +104,7 @@ class LearningConfig:
     torch_threads: int = 1
     adr: bool = False
     adr_every: int = ADR_EVERY
-    sim_processes: int | None = None
+    sim_processes: int = 1
 
     def __post_init__(self) -> None:
         """InvalidLearningConfig, naming the field, for a value no run can use: refused here, before
@@ -127,9 +127,9 @@ class LearningConfig:
             raise InvalidLearningConfig("clone_noise", f"must be a finite number >= 0, got {self.clone_noise!r}")
         if not 0.0 < self.action_std < float("inf"):
             raise InvalidLearningConfig("action_std", f"must be a finite number > 0 (rad/s), got {self.action_std!r}")
-        if self.sim_processes is not None and not 1 <= self.sim_processes <= self.envs:
+        if not isinstance(self.sim_processes, numbers.Integral) or not 1 <= self.sim_processes <= self.envs:
             raise InvalidLearningConfig(
-                "sim_processes", f"must be None or in 1..envs ({self.envs}), got {self.sim_processes!r}"
+                "sim_processes", f"must be an integer in 1..envs ({self.envs}), got {self.sim_processes!r}"
             )
         if self.preset not in PRESETS:
             raise InvalidLearningConfig("preset", f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
@@ -243,7 +243,6 @@ def _learn_policy(
         goal_box_spec(make_scene(task.tool, task.world))
     torch.manual_seed(config.seed)
     task.save(out_dir / TASK_NPZ)
-    processes = simulation_processes(config.sim_processes, task.world, config.envs)
     env = BatchedTaskVecEnv(
         task,
         config.envs,
@@ -251,7 +250,7 @@ def _learn_policy(
         scene_kwargs=config.scene_kwargs,
         reward=config.reward,
         adr=config.adr,
-        processes=processes,
+        processes=config.sim_processes,
     )
     cloning_record: dict[str, Any] = {}
 
