@@ -28,10 +28,13 @@ def spade_3d():
     return shipped_task("spade", "3d")
 
 
-def rollout(task, processes: int, steps: int) -> tuple[np.ndarray, ...]:
+def rollout(task, processes: int, steps: int, adr: bool = False) -> tuple[np.ndarray, ...]:
     """Observations, rewards and terminal infos of ``steps`` noisy tracking steps of B = 3 (a reset
-    at the horizon included)."""
-    env = BatchedTaskVecEnv(task, 3, seed=5, scene_kwargs=FEW_SPHERES, processes=processes)
+    at the horizon included); under ``adr`` the goal boxes are drawn in widened bounds."""
+    env = BatchedTaskVecEnv(task, 3, seed=5, scene_kwargs=FEW_SPHERES, processes=processes, adr=adr)
+    if env.adr is not None:  # as a boundary test moves them: in place, in the main process
+        env.adr.bounds.low[:] -= 0.1
+        env.adr.bounds.high[:] += 0.1
     rng = np.random.default_rng(1)
     try:
         observations, rewards, terminal = [env.reset()], [], []
@@ -45,6 +48,14 @@ def rollout(task, processes: int, steps: int) -> tuple[np.ndarray, ...]:
         return np.array(observations), np.array(rewards), np.array([t[:2] for t in terminal]), env.simulator.q
     finally:
         env.close()
+
+
+def test_adr_boxes_drawn_in_moved_bounds_are_those_of_one_process(spade_3d):
+    one, two = rollout(spade_3d, 1, 3, adr=True), rollout(spade_3d, 2, 3, adr=True)
+    for a, b in zip(one, two):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-9)
+    boxes = one[0][0, :, -2:]  # the observed goal boxes of the first reset
+    assert np.ptp(boxes[:, 0]) > 1e-3  # drawn apart, per instance
 
 
 def test_two_and_three_processes_give_the_one_process_rollout(spade_3d):
