@@ -32,7 +32,7 @@ from toolimit.demos.cleaning import CleaningReport, clean_demo
 from toolimit.demos.tool_demo import ToolDemo
 from toolimit.errors import InputError, InvalidSceneParameters
 from toolimit.interrupts import Interrupted, interruptible
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.replay import replay
@@ -333,7 +333,7 @@ def align(
     if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:
         previous_time = _restore(result, state, evaluator)
     # the search ends at the K-th candidate, usually long before the sample budget: count candidates
-    bar = tqdm(
+    bar = progress_bar(
         total=config.candidates,
         initial=len(result.candidates),
         desc=f"align {tool}/{world}",

@@ -6,8 +6,9 @@ demonstration -> alignment (OUT/alignment) -> trajectory with selection by robot
 with published limits). Called again on the same folder, it skips every finished stage and resumes
 the first unfinished one from its checkpoint (the alignment and the learning save theirs).
 OUT/run.json keeps each stage's wall time; OUT/evaluation.json has ``success_rate``,
-``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included) and
-``wall_time_s`` (alignment to evaluation, over every call).
+``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included),
+``wall_time_s`` (alignment to evaluation, over every call) and ``early_stop`` (the rule and the PPO
+steps where it ended learning, None if it ran its whole budget; None when off).
 """
 
 from __future__ import annotations
@@ -120,8 +121,10 @@ def run_pipeline(
         else:
             outcome = timed(stage, lambda: learn_stage(alignment, trajectory, learning, settings.learning, progress))
             record = outcome.record
+            stopped = (record.get("early_stop") or {}).get("stopped_at_ppo_env_steps")
             lines = [
                 f"{record['env_steps']} env steps ({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s"
+                + ("" if stopped is None else ", stopped early: learnt")
             ]
         for line in lines:
             report(stage, line)
@@ -133,6 +136,7 @@ def run_pipeline(
         "stage_times_s": times,
         "simulation_time_s": learned["simulation_time_s"],
         "learning_time_s": learned["learning_time_s"],
+        "early_stop": learned.get("early_stop"),
     }
     save_json(out / EVALUATION_JSON, record)
     export = export_stage(evaluation, out, settings.export)

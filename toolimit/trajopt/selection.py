@@ -31,7 +31,7 @@ import numpy as np
 
 from toolimit.artifacts import load_npz
 from toolimit.errors import BaseInsideFootprint, InputError
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 from toolimit.robots.model import RobotModel
 from toolimit.scenes.base import SceneParams, unpack_scene_params
 from toolimit.scenes.registry import make_scene
@@ -184,7 +184,7 @@ def select_by_robot_execution(
     arguments = (
         (robot, candidate, k, tool, world, options, seed, replays, scales) for k, candidate in enumerate(candidates)
     )
-    with tqdm(total=len(candidates), desc="robot execution", unit="candidate", disable=not progress) as bar:
+    with progress_bar(total=len(candidates), desc="robot execution", unit="candidate", disable=not progress) as bar:
         for kept, refusal, rewards_by_scale in ordered_results(_execute_candidate, arguments, workers):
             trajectories.append(None if kept is None else kept[1])
             rewards.append(float("nan") if kept is None else kept[0])
