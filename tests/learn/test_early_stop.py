@@ -4,6 +4,7 @@ run without it, and a stopped run that stays stopped."""
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 
 import numpy as np
 import pytest
@@ -87,3 +88,10 @@ def test_a_rule_no_run_can_use_is_refused(changes, field):
     with pytest.raises(InvalidLearningConfig) as error:
         StopRule(**changes)
     assert error.value.field == field
+
+
+def test_a_config_rebuilt_from_its_record_has_its_rule():
+    config = LearningConfig(stop=StopRule(every=3))
+    assert LearningConfig(**asdict(config)) == config  # as notebooks and learning.json hand it back
+    with pytest.raises(InvalidLearningConfig):
+        LearningConfig(stop=3)

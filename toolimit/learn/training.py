@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import numbers
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, cast
@@ -133,6 +133,10 @@ class LearningConfig:
             raise InvalidLearningConfig("preset", f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
         if self.reward not in REWARDS:
             raise InvalidLearningConfig("reward", f"unknown reward {self.reward!r}; choose one of {', '.join(REWARDS)}")
+        if isinstance(self.stop, Mapping):  # as ``asdict`` and learning.json write it
+            object.__setattr__(self, "stop", StopRule(**self.stop))
+        if not isinstance(self.stop, StopRule):
+            raise InvalidLearningConfig("stop", f"must be a StopRule, got {self.stop!r}")
 
     def settings(self) -> PpoSettings:
         """The PPO settings of the preset."""
