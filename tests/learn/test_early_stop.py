@@ -11,7 +11,7 @@ import pytest
 import torch
 
 from toolimit.errors import InvalidLearningConfig
-from toolimit.learn.early_stop import CHECK_GOAL, CHECK_SUCCESS, StopRule
+from toolimit.learn.early_stop import CHECK_GOAL, CHECK_SUCCESS, CHECK_TRAINING, EarlyStop, StopRule
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
 
 #: A clone good enough to succeed from the first update on the shipped planar spade.
@@ -25,7 +25,7 @@ CLONED = LearningConfig(
     value_steps=20,
     checkpoint_every=1,
     seed=0,
-    stop=StopRule(every=1, episodes=4, held=2),
+    stop=StopRule(every=1, episodes=4, training_success=0.0, held=2),
 )
 
 
@@ -46,10 +46,17 @@ def test_a_policy_that_has_learnt_stops_on_an_update_boundary(spade_task, tmp_pa
     stopped = learn_policy(spade_task, tmp_path / "stopped", _config(timesteps=6 * per_update), progress=False)
     record = stopped.record
     assert record["early_stop"]["stopped_at_ppo_env_steps"] == 2 * per_update == record["ppo_env_steps"]
-    assert record["early_stop"]["rule"] == {"every": 1, "episodes": 4, "success": 1.0, "held": 2}
+    assert record["early_stop"]["rule"] == {
+        "every": 1,
+        "episodes": 4,
+        "success": 1.0,
+        "training_success": 0.0,
+        "held": 2,
+    }
     curve = _curve(tmp_path / "stopped")
     assert [line["env_steps"] for line in curve] == [per_update, 2 * per_update]
     assert [line[CHECK_SUCCESS] for line in curve] == [1.0, 1.0] and all(line[CHECK_GOAL] > 0 for line in curve)
+    assert [line[CHECK_TRAINING] for line in curve] == [line["success_rate"] for line in curve]
     # the same two updates as a run of two updates without early stopping: checks draw nothing
     fixed = learn_policy(
         spade_task, tmp_path / "fixed", _config(timesteps=2 * per_update, early_stop=False), progress=False
@@ -62,6 +69,22 @@ def test_a_policy_that_has_learnt_stops_on_an_update_boundary(spade_task, tmp_pa
     again = learn_policy(spade_task, tmp_path / "stopped", _config(timesteps=6 * per_update), progress=False)
     assert again.record["resumed"] and again.record["ppo_env_steps"] == 2 * per_update
     assert _curve(tmp_path / "stopped") == curve
+
+
+def test_a_check_passes_only_with_the_training_episodes_succeeding_too(spade_task):
+    """Checks read back from a curve: a mean that succeeds while the training episodes fail is no pass."""
+    rule = StopRule(every=1, episodes=2, training_success=0.8, held=2)
+
+    def line(steps, check, training):
+        return {"env_steps": steps, "success_rate": training, CHECK_SUCCESS: check, CHECK_TRAINING: training}
+
+    def stop(curve):
+        return EarlyStop(spade_task, rule, curve)
+
+    assert stop([line(10, 1.0, 0.5), line(20, 1.0, 0.9)]).stopped_at is None  # one pass in a row
+    assert stop([line(10, 1.0, 0.9), line(20, 1.0, 0.9)]).stopped_at == 20
+    assert stop([line(10, 1.0, 0.9), line(20, 0.95, 1.0)]).stopped_at is None
+    assert stop([line(10, 1.0, 0.9), line(20, 0.95, 1.0), line(30, 1.0, 0.8), line(40, 1.0, 0.85)]).stopped_at == 40
 
 
 def test_a_rule_never_met_spends_the_whole_budget(spade_task, tmp_path):
