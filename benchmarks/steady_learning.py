@@ -17,6 +17,10 @@ them, the wall time of the stages run in that call and the machine's load) and w
 
     python benchmarks/steady_learning.py --out runs/steady                 # every run, in order
     python benchmarks/steady_learning.py --out runs/steady --only real_points_s1
+    python benchmarks/steady_learning.py --out runs/steady --only spade_00_s0 --relearn
+
+``--relearn`` learns again on the run's alignment and trajectory (after a change to the learning
+alone); its wall time is then the earlier stages' plus the new learning and evaluation.
 """
 
 from __future__ import annotations
@@ -24,12 +28,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from toolimit.artifacts import save_json
 from toolimit.demos import ToolDemo
 from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE, save_demo
 from toolimit.pipeline import PipelineSettings, run_pipeline
@@ -69,6 +75,18 @@ def demo_path(demo: str, out: Path) -> Path:
     return ROOT / "data" / "demos" / f"{demo}.npz"
 
 
+def forget_learning(folder: Path) -> None:
+    """Remove a run's learning and what followed it, and their times, keeping alignment and trajectory."""
+    for stage in ("learning", "policy_rollout", "export"):
+        shutil.rmtree(folder / stage, ignore_errors=True)
+    (folder / "evaluation.json").unlink(missing_ok=True)
+    run = folder / "run.json"
+    if run.is_file():
+        times = json.loads(run.read_text())["stage_times_s"]
+        kept = {stage: time for stage, time in times.items() if stage in ("alignment", "trajectory")}
+        save_json(run, {"stage_times_s": kept})
+
+
 def run_one(name: str, demo: str, seed: int, out: Path) -> dict:
     """Run (or resume) one chain; its row."""
     load = os.getloadavg()[0]
@@ -106,6 +124,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("runs/steady"), help="one folder per run")
     parser.add_argument("--only", default=None, help="one run's name (see RUNS)")
+    parser.add_argument("--relearn", action="store_true", help="learn again on the runs' alignment and trajectory")
     args = parser.parse_args()
     if not REAL.is_file():
         print(f"{REAL}: not found (the shared data sits beside the checkout)", file=sys.stderr)
@@ -118,8 +137,10 @@ def main() -> int:
     rows = json.loads(RESULTS.read_text())["runs"] if RESULTS.is_file() else {}
     for name, demo, seed in RUNS:
         if args.only in (None, name):
+            if args.relearn:
+                forget_learning(args.out / name)
             rows[name] = run_one(name, demo, seed, args.out)
-            RESULTS.write_text(json.dumps({"runs": rows}, indent=1) + "\n")
+            save_json(RESULTS, {"runs": rows})
     for row in (rows[name] for name in names if name in rows):
         print(
             f"{row['name']:16s} success {row['success_rate']:.2f} ({row['goal_reward_mean']:.1f} spheres), "
