@@ -19,6 +19,7 @@ Without Ray installed, :func:`ray_cluster` raises :class:`RayMissing` (one line 
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import os
 import signal
 import tempfile
@@ -31,7 +32,7 @@ from typing import Any, TypeVar
 
 from toolimit.artifacts import atomic_path
 from toolimit.errors import InputError
-from toolimit.interrupts import SIGNALS, starting_processes
+from toolimit.interrupts import SIGNALS, as_interrupted, starting_processes
 
 #: What ``--ray`` / ``ray=`` asks for: False, this machine's worker processes; True, the cluster of
 #: ``RAY_ADDRESS`` or else a private Ray on this machine; a string, the address of a cluster to join.
@@ -109,38 +110,77 @@ def ray_cluster(target: RayTarget = True, cpus: int | None = None) -> Iterator[C
         return
     address = target if isinstance(target, str) else os.environ.get("RAY_ADDRESS") or None
     if address is not None:
-        with _keeping_signal_handlers():
+        # Ray turns a loopback address into this machine's IP unless in its single-machine mode
+        on_loopback = loopback_environment() if _is_loopback(address) else contextlib.nullcontext()
+        with on_loopback, _keeping_signal_handlers():
             ray.init(address=address, log_to_driver=False, configure_logging=False)
         try:
             yield Cluster(address, private=False)
         finally:
             ray.shutdown()
         return
-    saved = {name: os.environ.get(name) for name in PRIVATE_ENVIRONMENT}
-    os.environ.update(PRIVATE_ENVIRONMENT)
+    with loopback_environment(), starting_processes(), _keeping_signal_handlers():
+        context = ray.init(
+            address="local",
+            num_cpus=cpus,
+            include_dashboard=False,
+            _node_ip_address="127.0.0.1",
+            log_to_driver=False,
+            configure_logging=False,
+        )
     try:
-        import ray._private.ray_constants as constants
-
-        constants.ENABLE_RAY_CLUSTER = False  # read when Ray was imported: the node IP is then the loopback's
-        with starting_processes(), _keeping_signal_handlers():
-            context = ray.init(
-                address="local",
-                num_cpus=cpus,
-                include_dashboard=False,
-                _node_ip_address="127.0.0.1",
-                log_to_driver=False,
-                configure_logging=False,
-            )
-        try:
-            yield Cluster(context.address_info["address"], private=True)
-        finally:
-            ray.shutdown()
+        yield Cluster(context.address_info["address"], private=True)
     finally:
+        ray.shutdown()
+
+
+def _is_loopback(address: str) -> bool:
+    """Whether a cluster address (``host:port``) names this machine's loopback."""
+    host = address.rpartition(":")[0].strip("[]") or address
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return host == "localhost"
+
+
+@contextlib.contextmanager
+def loopback_environment() -> Iterator[None]:
+    """Within the block, Ray nodes started by this process are private ones: node IP 127.0.0.1
+    (so every server binds the loopback only), no usage statistics (:data:`PRIVATE_ENVIRONMENT`,
+    inherited by the node's processes). Ray reads its single-machine switch when imported: it is
+    set on the imported module too."""
+    require_ray()
+    import ray._private.ray_constants as constants
+
+    saved = {name: os.environ.get(name) for name in PRIVATE_ENVIRONMENT}
+    cluster_mode = constants.ENABLE_RAY_CLUSTER
+    os.environ.update(PRIVATE_ENVIRONMENT)
+    constants.ENABLE_RAY_CLUSTER = False
+    try:
+        yield
+    finally:
+        constants.ENABLE_RAY_CLUSTER = cluster_mode
         for name, value in saved.items():
             if value is None:
                 os.environ.pop(name, None)
             else:
                 os.environ[name] = value
+
+
+@contextlib.contextmanager
+def _signals_as_interrupted() -> Iterator[None]:
+    """Around a blocking Ray call: Ray checks for signals while it waits and raises a KeyboardInterrupt
+    of its own after this process's handler ran; make it the :class:`Interrupted` the handler meant."""
+    try:
+        yield
+    except KeyboardInterrupt as stop:
+        raise as_interrupted(stop) from None
+
+
+def _get(ref: Any) -> Any:
+    """``ray.get(ref)``, a signal meanwhile raising :class:`Interrupted`."""
+    with _signals_as_interrupted():
+        return require_ray().get(ref)
 
 
 @contextlib.contextmanager
@@ -188,9 +228,9 @@ def ordered_results_on_ray(
         for k, args in enumerate(arguments):
             pending.append(actors[k % len(actors)].run.remote(function, args))
             if len(pending) >= QUEUED_PER_ACTOR * len(actors):
-                yield ray.get(pending.pop(0))
+                yield _get(pending.pop(0))
         while pending:
-            yield ray.get(pending.pop(0))
+            yield _get(pending.pop(0))
     finally:
         for actor in actors:
             ray.kill(actor)
@@ -288,7 +328,8 @@ class FolderTasks:
         ray = require_ray()
         keys = {ref: key for key, ref in self._pending.items()}
         while True:
-            done, _ = ray.wait(list(keys), num_returns=1, timeout=0.5)  # short waits: a signal gets through
+            with _signals_as_interrupted():
+                done, _ = ray.wait(list(keys), num_returns=1, timeout=0.5)
             if done:
                 key = keys[done[0]]
                 del self._pending[key]
