@@ -99,7 +99,7 @@ def reproduce_on_cluster(
                     code = max(code, int(report.failed))
                     for cell in report.cells:
                         save_json(out / "cells" / f"{experiment.cell_key(cell.method)}.json", cell.record())
-                        bar.update()
+                    bar.update(1 if step != "prepare" else len(report.cells))  # a learning run: its cell, or none
                     if step == "prepare" and report.task is not None:
                         settings = _one_process(experiments[experiment])
                         for method in [m for m in todo[experiment] if m not in PREPARED_METHODS]:

@@ -93,8 +93,9 @@ def run_pipeline(
     """
     out = Path(out)
     settings = settings if settings is not None else PipelineSettings.for_world(world)
-    with ray_cluster(ray) if ray else contextlib.nullcontext():
-        run_stages(demo, out, tool, robot, world, settings, progress, on_stage, ray=ray)
+    with ray_cluster(ray) if ray else contextlib.nullcontext():  # stopped before learning, which runs here
+        run_stages(demo, out, tool, robot, world, settings, progress, on_stage, STAGES[:2], ray=ray)
+    run_stages(demo, out, tool, robot, world, settings, progress, on_stage, STAGES[2:])
     learning = out / "learning"
     evaluation = _timed(out, "evaluation", lambda: evaluate_stage(learning, settings.evaluation))
     learned = learning_record(learning)
