@@ -69,11 +69,12 @@ def test_the_private_ray_listens_on_the_loopback_only_and_ends_with_the_block() 
     from toolimit.distributed import node_name, ray_cluster
 
     assert not ray.is_initialized()
+    earlier = set(psutil.Process().children(recursive=True))  # e.g. multiprocessing's resource tracker
     with ray_cluster(True, cpus=2) as cluster:
         assert cluster.private and cluster.address.startswith("127.0.0.1:")
         nodes = ray.get([ray.remote(node_name).remote() for _ in range(2)])  # start the workers
         assert all(name.startswith("127.0.0.1/") for name in nodes)
-        processes = psutil.Process().children(recursive=True)
+        processes = [p for p in psutil.Process().children(recursive=True) if p not in earlier]
         sockets = _listening([os.getpid(), *(p.pid for p in processes)])
         names = {name for _, _, name in sockets}
         assert {"gcs_server", "raylet"} <= names and len(sockets) >= 4, sockets
