@@ -73,23 +73,12 @@ def test_a_corrupt_input_file_is_one_line_and_exit_2(tmp_path, capsys, command):
     (tmp_path / "trajectory.npz").write_text("not a zip")
     argv = {
         "export": ["export", "--trajectory", str(tmp_path), "--robot", "panda", "--out", str(tmp_path / "out")],
-        "trajopt": [
-            "trajopt",
-            "--robot",
-            "panda",
-            "--tool",
-            "spade",
-            "--poses",
-            str(tmp_path / "trajectory.npz"),
-            "--out",
-            str(tmp_path / "out"),
-        ],
+        "trajopt": ["trajopt", "--robot", "panda", "--tool", "spade", "--poses", str(tmp_path / "trajectory.npz"),
+                    "--out", str(tmp_path / "out")],
     }[command]
     assert toolimit(argv) == 2
     error = capsys.readouterr().err.strip().splitlines()
-    assert error == [
-        f"toolimit {command}: error: {tmp_path / 'trajectory.npz'}: cannot read as .npz (not a zip archive)"
-    ]
+    assert error == [f"toolimit {command}: error: {tmp_path / 'trajectory.npz'}: cannot read as .npz (not a zip archive)"]
     assert not (tmp_path / "out").exists()
 
 

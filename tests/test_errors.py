@@ -19,19 +19,11 @@ from toolimit.errors import (
 )
 
 
-@pytest.mark.parametrize(
-    "kind, builtin",
-    [
-        (InputError, ValueError),
-        (DemoError, ValueError),
-        (InvalidSceneParameters, ValueError),
-        (BaseInsideFootprint, ValueError),
-        (PathOutsideLimits, ValueError),
-        (SolverFailure, RuntimeError),
-        (cli.CliError, ValueError),
-        (InvalidLearningConfig, ValueError),
-    ],
-)
+@pytest.mark.parametrize("kind, builtin", [
+    (InputError, ValueError), (DemoError, ValueError), (InvalidSceneParameters, ValueError),
+    (BaseInsideFootprint, ValueError), (PathOutsideLimits, ValueError), (SolverFailure, RuntimeError),
+    (cli.CliError, ValueError), (InvalidLearningConfig, ValueError),
+])
 def test_every_kind_is_a_toolimit_error_and_its_builtin(kind, builtin):
     assert issubclass(kind, ToolimitError) and issubclass(kind, builtin)
 
@@ -49,17 +41,11 @@ def _cli_raising(monkeypatch, error: BaseException) -> None:
     monkeypatch.setattr(cli, "COMMANDS", (module.__name__,))
 
 
-@pytest.mark.parametrize(
-    "error",
-    [
-        DemoError("demo.npz: key 'head' has NaN"),
-        InvalidSceneParameters("box outside the world"),
-        BaseInsideFootprint("base inside element 0"),
-        PathOutsideLimits("joint 1 at sample 3"),
-        SolverFailure("OSQP failed"),
-        FileNotFoundError("x.npz: no such file"),
-    ],
-)
+@pytest.mark.parametrize("error", [
+    DemoError("demo.npz: key 'head' has NaN"), InvalidSceneParameters("box outside the world"),
+    BaseInsideFootprint("base inside element 0"), PathOutsideLimits("joint 1 at sample 3"),
+    SolverFailure("OSQP failed"), FileNotFoundError("x.npz: no such file"),
+])
 def test_cli_answers_the_error_family_with_one_line_and_exit_2(monkeypatch, capsys, error):
     _cli_raising(monkeypatch, error)
     assert cli.main(["boom"]) == 2
@@ -67,7 +53,8 @@ def test_cli_answers_the_error_family_with_one_line_and_exit_2(monkeypatch, caps
     assert err == f"toolimit boom: error: {error}\n"
 
 
-@pytest.mark.parametrize("error", [ValueError("shapes (3,) and (4,) do not match"), KeyError("q"), RuntimeError("bug")])
+@pytest.mark.parametrize("error", [ValueError("shapes (3,) and (4,) do not match"), KeyError("q"),
+                                   RuntimeError("bug")])
 def test_cli_lets_a_library_bug_show_its_traceback(monkeypatch, error):
     _cli_raising(monkeypatch, error)
     with pytest.raises(type(error)):

@@ -79,8 +79,7 @@ def test_notebook_is_stored_without_outputs(path):
     notebook = nbformat.read(path, as_version=4)
     nbformat.validate(notebook)
     dirty = [
-        index
-        for index, cell in enumerate(notebook.cells)
+        index for index, cell in enumerate(notebook.cells)
         if cell.cell_type == "code" and (cell.outputs or cell.execution_count is not None)
     ]
     assert not dirty, (
@@ -129,12 +128,8 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
 def test_a_marked_number_must_be_printed_as_a_whole_token():
     notebook = nbformat.v4.new_notebook(
         cells=[
-            nbformat.v4.new_markdown_cell(
-                'clip <span class="printed">0.5</span>, <span class="printed">200</span> spheres'
-            ),
-            nbformat.v4.new_code_cell(
-                "", outputs=[nbformat.v4.new_output("stream", text="max_grad_norm 0.51, 200 spheres")]
-            ),
+            nbformat.v4.new_markdown_cell('clip <span class="printed">0.5</span>, <span class="printed">200</span> spheres'),
+            nbformat.v4.new_code_cell("", outputs=[nbformat.v4.new_output("stream", text="max_grad_norm 0.51, 200 spheres")]),
         ]
     )
     assert unprinted_claims(notebook) == ["0.5"]

@@ -114,21 +114,8 @@ def _readme_python_block() -> str:
 def command_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], Path]:
     """``toolimit run --quick`` on the planar spade: (its arguments, its folder)."""
     out = tmp_path_factory.mktemp("command")
-    argv = [
-        "run",
-        "--tool",
-        "spade",
-        "--robot",
-        "planar3",
-        "--world",
-        "planar",
-        "--demo",
-        str(DEMO),
-        "--out",
-        str(out),
-        "--quick",
-        "--quiet",
-    ]
+    argv = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo", str(DEMO),
+            "--out", str(out), "--quick", "--quiet"]
     assert toolimit(argv) == 0
     return argv, out
 

@@ -62,23 +62,14 @@ def test_tiny_3d_search_finds_a_candidate_with_sand_in_the_goal_box(one_worker):
     scene = make_scene("spade", "3d")
     rng = np.random.default_rng([SEED, candidate.index])
     redrawn = draw_alignment_sample(
-        result.demo,
-        result.keypoints,
-        scene.parameters,
-        CONFIG,
-        CONFIG.element_covariance(None),
-        result.min_distance,
-        rng,
+        result.demo, result.keypoints, scene.parameters, CONFIG, CONFIG.element_covariance(None),
+        result.min_distance, rng,
     )
     assert redrawn.to_dict() == candidate.sample.to_dict()
     _, _, poses = result.aligned_motion(candidate)
     final = replay_scene(scene, poses, candidate.sample.params, rng)[-1]
     offset = final["sphere_positions"] - np.asarray(candidate.sample.params["goal_position"]) * [1.0, 1.0, 0.0]
-    inside = (
-        (np.abs(offset[:, :2]) < GOAL_INNER / 2).all(axis=1)
-        & (offset[:, 2] >= 0)
-        & (offset[:, 2] <= GOAL_REGION_HEIGHT)
-    )
+    inside = (np.abs(offset[:, :2]) < GOAL_INNER / 2).all(axis=1) & (offset[:, 2] >= 0) & (offset[:, 2] <= GOAL_REGION_HEIGHT)
     assert inside.sum() > 0
     assert inside.sum() == final["in_box"]
 

@@ -44,10 +44,7 @@ def test_mixture_weights_and_component_covariance():
     covariance = np.diag([0.04, 0.01, 0.09])
     rng = np.random.default_rng(7)
     draws = np.array(
-        [
-            sample_element_positions(keypoints, 1, covariance, 0.0, rng, weights=np.array([1.0, 3.0]))[0]
-            for _ in range(4000)
-        ]
+        [sample_element_positions(keypoints, 1, covariance, 0.0, rng, weights=np.array([1.0, 3.0]))[0] for _ in range(4000)]
     )
     near_second = draws[:, 0] > 5.0
     assert near_second.mean() == pytest.approx(0.75, abs=0.03)
@@ -105,9 +102,7 @@ def test_drawn_sample_places_ground_elements_near_the_transformed_keypoints():
     config = AlignmentConfig(element_std=0.05)
     covariance = config.element_covariance("xz")
     for seed in range(30):
-        sample = draw_alignment_sample(
-            demo, keypoints, scene.parameters, config, covariance, 0.05, np.random.default_rng(seed)
-        )
+        sample = draw_alignment_sample(demo, keypoints, scene.parameters, config, covariance, 0.05, np.random.default_rng(seed))
         assert sample is not None and sample.scale in config.scales
         assert list(sample.params) == ["target", "radius"]
         target = sample.params["target"]
@@ -132,9 +127,7 @@ def test_planar_rolls_face_one_side_of_the_plane_and_use_the_same_draws():
     config = AlignmentConfig()
     for seed in range(20):
         draws = [
-            draw_alignment_sample(
-                demo, keypoints, (), config, np.eye(3) * 0.01, 0.05, np.random.default_rng(seed), plane=plane
-            )
+            draw_alignment_sample(demo, keypoints, (), config, np.eye(3) * 0.01, 0.05, np.random.default_rng(seed), plane=plane)
             for plane in (None, "xz")
         ]
         free, planar = draws

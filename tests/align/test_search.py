@@ -17,19 +17,10 @@ from toolimit.align.search import align
 CONFIG = AlignmentConfig(samples=400, candidates=4, replays=5, chunk_size=16, element_std=0.05, ground_tolerance=10.0)
 
 
-def run(
-    workers: int = 1, config: AlignmentConfig = CONFIG, seed: int = 3, checkpoint=None, factory=None, **scene_kwargs
-):
+def run(workers: int = 1, config: AlignmentConfig = CONFIG, seed: int = 3, checkpoint=None, factory=None, **scene_kwargs):
     factory = factory or functools.partial(FakeTargetScene, **scene_kwargs)
     return align(
-        make_demo(),
-        "spade",
-        "planar",
-        config,
-        seed=seed,
-        workers=workers,
-        progress=False,
-        scene_factory=factory,
+        make_demo(), "spade", "planar", config, seed=seed, workers=workers, progress=False, scene_factory=factory,
         checkpoint=checkpoint,
     )
 
@@ -75,21 +66,14 @@ def test_same_result_whatever_the_number_of_workers():
 
 
 def test_rejections_are_counted_exactly():
-    config = AlignmentConfig(
-        samples=120, candidates=1000, replays=2, chunk_size=32, element_std=0.05, ground_tolerance=10.0
-    )
+    config = AlignmentConfig(samples=120, candidates=1000, replays=2, chunk_size=32, element_std=0.05, ground_tolerance=10.0)
     result = run(config=config, reject_below_x=0.3)
     scene = FakeTargetScene()
     expected = 0
     for index in range(config.samples):
         sample = draw_alignment_sample(
-            result.demo,
-            result.keypoints,
-            scene.parameters,
-            config,
-            config.element_covariance("xz"),
-            result.min_distance,
-            np.random.default_rng([3, index]),
+            result.demo, result.keypoints, scene.parameters, config, config.element_covariance("xz"),
+            result.min_distance, np.random.default_rng([3, index]),
         )
         expected += sample.params["target"][0] < 0.3
     assert result.samples_tried == config.samples  # fewer candidates than asked: all samples tried
@@ -104,13 +88,8 @@ def test_samples_taking_the_tool_below_the_ground_are_rejected():
     expected = 0
     for index in range(config.samples):
         sample = draw_alignment_sample(
-            result.demo,
-            result.keypoints,
-            scene.parameters,
-            config,
-            config.element_covariance("xz"),
-            result.min_distance,
-            np.random.default_rng([3, index]),
+            result.demo, result.keypoints, scene.parameters, config, config.element_covariance("xz"),
+            result.min_distance, np.random.default_rng([3, index]),
         )
         aligned, _, _ = apply_alignment_sample(result.demo, result.keypoints, sample)
         expected += aligned.head[:, 2].min() < -0.02
@@ -164,9 +143,7 @@ def test_a_crashed_search_resumes_from_its_checkpoint_with_the_same_result(tmp_p
     import toolimit.align.search as search
 
     monkeypatch.setattr(search, "CHECKPOINT_EVERY_S", 0.0)  # save after every chunk
-    config = AlignmentConfig(
-        samples=300, candidates=5, replays=3, chunk_size=10, element_std=0.05, ground_tolerance=10.0
-    )
+    config = AlignmentConfig(samples=300, candidates=5, replays=3, chunk_size=10, element_std=0.05, ground_tolerance=10.0)
     checkpoint = tmp_path / "search.json"
     uninterrupted = run(config=config)
     with pytest.raises(RuntimeError, match="simulated crash"):

@@ -43,22 +43,8 @@ def demo_file(tmp_path, fake_scene) -> Path:
 
 
 def align_args(demo: Path, out: Path, *extra: str, clean: bool = False) -> list[str]:
-    return [
-        "align",
-        "--tool",
-        "spade",
-        "--world",
-        "planar",
-        "--demo",
-        str(demo),
-        "--out",
-        str(out),
-        "--workers",
-        "1",
-        "--quiet",
-        *([] if clean else ["--no-clean"]),
-        *extra,
-    ]
+    return ["align", "--tool", "spade", "--world", "planar", "--demo", str(demo), "--out", str(out),
+            "--workers", "1", "--quiet", *([] if clean else ["--no-clean"]), *extra]
 
 
 def assert_user_error(capsys, argv: list[str], fragment: str, out: Path) -> None:
@@ -126,8 +112,7 @@ def test_writes_record_and_aligned_demo(capsys, tmp_path, demo_file):
     assert "cleaned demo" in printed and "best: sample" in printed
     assert printed.splitlines()[-1] == (
         f"wrote {out / 'alignment.json'}, {out / 'candidates.npz'} and {out / 'aligned_demo.npz'}; next: "
-        f"toolimit trajopt --robot planar3 --tool spade --alignment {out} --out {out}_planar3"
-    )
+        f"toolimit trajopt --robot planar3 --tool spade --alignment {out} --out {out}_planar3")
     record = json.loads((out / "alignment.json").read_text())
     for key in ("tool", "world", "demo", "seed", "samples_tried", "samples_rejected", "wall_time_s", "candidates"):
         assert key in record
@@ -181,25 +166,9 @@ def test_real_spade_trajectory_aligns_in_the_planar_spade_scene(capsys, tmp_path
     a candidate within its first few samples (benchmarks/alignment_planar.py has the full runs).
     """
     out = tmp_path / "spade"
-    argv = [
-        "align",
-        "--tool",
-        "spade",
-        "--demo",
-        str(video_demos_dir / "spade_video1_aligned.npz"),
-        "--no-clean",
-        "--samples",
-        "30",
-        "--candidates",
-        "1",
-        "--workers",
-        "1",
-        "--quiet",
-        "--out",
-        str(out),
-        "--rerun",
-        str(tmp_path / "spade.rrd"),
-    ]
+    argv = ["align", "--tool", "spade", "--demo", str(video_demos_dir / "spade_video1_aligned.npz"), "--no-clean",
+            "--samples", "30", "--candidates", "1", "--workers", "1", "--quiet", "--out", str(out),
+            "--rerun", str(tmp_path / "spade.rrd")]
     assert main(argv) == 0, capsys.readouterr().err
     assert (tmp_path / "spade.rrd").stat().st_size > 10_000 or os.environ.get("RERUN") == "off"
     record = json.loads((out / "alignment.json").read_text())
@@ -217,26 +186,8 @@ def test_html_replay_of_a_3d_alignment(capsys, tmp_path):
     demo = tmp_path / "hammer.npz"
     save_demo(synthesize_demo("hammer", seed=0), demo)
     out, page = tmp_path / "run", tmp_path / "replay.html"
-    argv = [
-        "align",
-        "--tool",
-        "hammer",
-        "--world",
-        "3d",
-        "--demo",
-        str(demo),
-        "--samples",
-        "200",
-        "--candidates",
-        "1",
-        "--workers",
-        "1",
-        "--quiet",
-        "--out",
-        str(out),
-        "--html",
-        str(page),
-    ]
+    argv = ["align", "--tool", "hammer", "--world", "3d", "--demo", str(demo), "--samples", "200",
+            "--candidates", "1", "--workers", "1", "--quiet", "--out", str(out), "--html", str(page)]
     assert main(argv) == 0, capsys.readouterr().err
     text = page.read_text()
     assert text.lstrip().lower().startswith("<!doctype html") or "<html" in text[:500].lower()
@@ -248,22 +199,8 @@ def test_real_hammer_recording_aligns_with_the_papers_z_offset_spread(capsys, tm
     """The real hammer file's heights are not measured from the ground (its strikes lie 1.3 m
     below its nail): the default spread of p_z (0.1 m) cannot lift them, the paper's 0.5 m can."""
     demo = str(video_demos_dir / "hammer_video1_aligned.npz")
-    common = [
-        "align",
-        "--tool",
-        "hammer",
-        "--world",
-        "3d",
-        "--demo",
-        demo,
-        "--samples",
-        "300",
-        "--candidates",
-        "1",
-        "--workers",
-        "1",
-        "--quiet",
-    ]
+    common = ["align", "--tool", "hammer", "--world", "3d", "--demo", demo, "--samples", "300",
+              "--candidates", "1", "--workers", "1", "--quiet"]
     assert main([*common, "--out", str(tmp_path / "narrow")]) == 1
     assert main([*common, "--z-offset-std", "0.5", "--out", str(tmp_path / "paper")]) == 0, capsys.readouterr().err
     record = json.loads((tmp_path / "paper" / "alignment.json").read_text())

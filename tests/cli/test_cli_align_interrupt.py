@@ -43,31 +43,13 @@ def _running(pid: int) -> bool:
         (signal.SIGINT, True, 2, False),
         (signal.SIGTERM, True, 1, False),
     ],
-    ids=[
-        "sigint-group-once-saved",
-        "sigterm-main-twice-saved",
-        "sigint-group-twice-at-start",
-        "sigterm-group-at-start",
-    ],
+    ids=["sigint-group-once-saved", "sigterm-main-twice-saved", "sigint-group-twice-at-start", "sigterm-group-at-start"],
 )
 def test_an_interrupt_ends_every_process(repo_root, tmp_path, signum, to_group, count, after_progress):
     out = tmp_path / "align"
-    command = [
-        shutil.which("toolimit", path=os.path.dirname(sys.executable)) or "toolimit",
-        "align",
-        "--tool",
-        "spade",
-        "--world",
-        "planar",
-        "--demo",
-        str(repo_root / "data/demos/spade_00.npz"),
-        "--out",
-        str(out),
-        "--workers",
-        "2",
-        "--candidates",
-        "10000",
-    ]
+    command = [shutil.which("toolimit", path=os.path.dirname(sys.executable)) or "toolimit", "align",
+               "--tool", "spade", "--world", "planar", "--demo", str(repo_root / "data/demos/spade_00.npz"),
+               "--out", str(out), "--workers", "2", "--candidates", "10000"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
     stderr = bytearray()
     reader = threading.Thread(target=lambda: [stderr.extend(b) for b in iter(lambda: process.stderr.read1(4096), b"")])

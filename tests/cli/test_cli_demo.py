@@ -42,10 +42,8 @@ def test_show_says_raw_and_cleaned(capsys, repo_root):
     cleaned, report = clean_demo(raw)
     assert raw_line.startswith("as loaded (raw): ")
     assert raw_line.endswith(f"keypoints (frames) {velocity_keypoints(raw).tolist()}")
-    assert clean_line.startswith(
-        f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced, "
-        f"{len(report.head_replaced_frames)} of them with the head's position)"
-    )
+    assert clean_line.startswith(f"cleaned, as `toolimit align` uses it ({len(report.replaced_frames)} frames replaced, "
+                                 f"{len(report.head_replaced_frames)} of them with the head's position)")
     assert clean_line.endswith(f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}")
     assert f"peak speed {raw.speed().max():.2f} m/s" in raw_line
     assert f"peak speed {cleaned.speed().max():.2f} m/s" in clean_line

@@ -21,55 +21,27 @@ def _trajectory_dir(tmp_path, duration: float):
     shape = (1.0 - np.cos(2 * np.pi * times / duration)) ** 2 / 4.0
     q = np.array([0.0, -0.3, 0.0, -1.8, 0.0, 1.6, 0.8]) + np.outer(shape, [0.4, 0.3, -0.3, 0.4, 0.5, -0.4, 0.6])
     directory = tmp_path / f"trajopt_{duration:g}s"
-    save_npz(
-        directory / "trajectory.npz",
-        q=q,
-        v=np.diff(q, axis=0) / DT,
-        base=np.array([0.1, 0.2, 0.3]),
-        joint_names=JOINTS,
-        dt=DT,
-    )
+    save_npz(directory / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.array([0.1, 0.2, 0.3]),
+             joint_names=JOINTS, dt=DT)
     return directory
 
 
 def test_export_writes_csv_and_json(tmp_path, capsys):
     out = tmp_path / "robot"
-    code = main(
-        [
-            "export",
-            "--trajectory",
-            str(_trajectory_dir(tmp_path, 4.0)),
-            "--robot",
-            "panda",
-            "--out",
-            str(out),
-            "--rate",
-            "500",
-        ]
-    )
+    code = main(["export", "--trajectory", str(_trajectory_dir(tmp_path, 4.0)), "--robot", "panda", "--out", str(out),
+                 "--rate", "500"])
     assert code == 0
     assert sorted(path.name for path in out.iterdir()) == ["joint_trajectory.csv", "joint_trajectory.json"]
     summary = json.loads((out / "joint_trajectory.json").read_text())
-    assert (
-        summary["rate_hz"] == 500.0 and summary["n_samples"] == 2012
-    )  # 4 s + two end spans of dt / 4, up to the next 2 ms
+    assert summary["rate_hz"] == 500.0 and summary["n_samples"] == 2012  # 4 s + two end spans of dt / 4, up to the next 2 ms
     printed = capsys.readouterr().out
     assert re.search(r"retimed within panda's limits: 4\.021 s against 4\.000 s optimised \(1\.01x\)", printed)
     assert printed.splitlines()[-1].startswith(f"wrote {out / 'joint_trajectory.csv'} (2012 samples at 500 Hz)")
 
 
 def test_a_too_fast_trajectory_is_slowed_down(tmp_path, capsys):
-    code = main(
-        [
-            "export",
-            "--trajectory",
-            str(_trajectory_dir(tmp_path, 0.5)),
-            "--robot",
-            "panda",
-            "--out",
-            str(tmp_path / "robot"),
-        ]
-    )
+    code = main(["export", "--trajectory", str(_trajectory_dir(tmp_path, 0.5)), "--robot", "panda",
+                 "--out", str(tmp_path / "robot")])
     assert code == 0
     duration, optimised = re.search(r"(\d+\.\d+) s against (\d+\.\d+) s optimised", capsys.readouterr().out).groups()
     assert float(optimised) == 0.5 and float(duration) > 1.0
@@ -118,17 +90,8 @@ def test_exports_what_trajopt_saves(tmp_path):
         q, v, base = arrays["q"], arrays["v"], arrays["base"]
     horizon = len(v)
     result = TrajectoryResult(
-        robot="panda",
-        tool="spade",
-        joint_names=tuple(JOINTS),
-        q=q,
-        v=v,
-        base=base,
-        dt=DT,
-        time_scale=1.0,
-        position_error=np.zeros(horizon),
-        rotation_error=np.zeros(horizon),
-        limit_margin=np.ones_like(q),
+        robot="panda", tool="spade", joint_names=tuple(JOINTS), q=q, v=v, base=base, dt=DT, time_scale=1.0,
+        position_error=np.zeros(horizon), rotation_error=np.zeros(horizon), limit_margin=np.ones_like(q),
         velocity_ratio=np.zeros_like(v),
     )
     saved = result.save(tmp_path / "from_trajopt")

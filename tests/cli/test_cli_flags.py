@@ -63,25 +63,8 @@ def test_trajopt_and_run_agree() -> None:
 
 def test_given_flags_win_over_quick_and_reach_the_right_field() -> None:
     argv = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo", "d.npz", "--out", "o"]
-    settings = pipeline_settings(
-        parse(
-            [
-                *argv,
-                "--quick",
-                "--samples",
-                "77",
-                "--velocity-weight",
-                "0.5",
-                "--seed",
-                "3",
-                "--no-clone",
-                "--time-scale",
-                "1,2",
-                "--episodes",
-                "9",
-            ]
-        )
-    )
+    settings = pipeline_settings(parse([*argv, "--quick", "--samples", "77", "--velocity-weight", "0.5", "--seed", "3",
+                                        "--no-clone", "--time-scale", "1,2", "--episodes", "9"]))
     assert settings.align.search.samples == 77 and settings.align.search.candidates == 3  # quick's
     assert settings.trajopt.weights.velocity == 0.5 and settings.trajopt.time_scales == (1.0, 2.0)
     assert settings.learning.clone is False and settings.learning.timesteps == 2000  # quick's
@@ -91,14 +74,9 @@ def test_given_flags_win_over_quick_and_reach_the_right_field() -> None:
 
 @pytest.mark.parametrize(
     ("flags", "settings"),
-    [
-        (ALIGN_FLAGS, AlignSettings()),
-        (TRAJOPT_FLAGS, TrajoptSettings()),
-        (LEARNING_FLAGS, LearningConfig()),
-        (EVALUATION_FLAGS, EvaluationSettings()),
-        (EXPORT_FLAGS, ExportSettings()),
-        (RUN_FLAGS, PipelineSettings()),
-    ],
+    [(ALIGN_FLAGS, AlignSettings()), (TRAJOPT_FLAGS, TrajoptSettings()), (LEARNING_FLAGS, LearningConfig()),
+     (EVALUATION_FLAGS, EvaluationSettings()), (EXPORT_FLAGS, ExportSettings()),
+     (RUN_FLAGS, PipelineSettings())],
 )
 def test_every_flag_names_a_documented_field(flags: tuple[Flag, ...], settings: object) -> None:
     for flag in flags:
@@ -120,9 +98,7 @@ def test_the_help_shows_the_settings_default() -> None:
 def test_a_refused_value_names_the_flag(capsys: pytest.CaptureFixture[str]) -> None:
     from toolimit.cli import main
 
-    assert (
-        main(["trajopt", "--robot", "panda", "--tool", "spade", "--poses", "p.npz", "--out", "o", "--starts", "0"]) == 2
-    )
+    assert main(["trajopt", "--robot", "panda", "--tool", "spade", "--poses", "p.npz", "--out", "o", "--starts", "0"]) == 2
     assert "--starts: must be an integer >= 1, got 0" in capsys.readouterr().err
     assert main(["align", "--tool", "spade", "--demo", "d.npz", "--out", "o", "--candidates", "0"]) == 2
     assert "--candidates: expected a positive integer, got 0" in capsys.readouterr().err

@@ -8,19 +8,7 @@ import pytest
 
 from toolimit.cli import main
 
-TINY = [
-    "--timesteps",
-    "0",
-    "--envs",
-    "2",
-    "--clone-rollouts",
-    "2",
-    "--clone-steps",
-    "10",
-    "--value-steps",
-    "10",
-    "--quiet",
-]
+TINY = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "2", "--clone-steps", "10", "--value-steps", "10", "--quiet"]
 
 
 def _error_line(capsys) -> str:
@@ -43,24 +31,8 @@ def test_learn_with_adr_then_a_heat_map(tmp_path, capsys):
     assert main(["learn", "--env", "toolimit/SpadePlanar-v0", "--adr", "--out", str(out), *TINY]) == 0
     assert "adr" in json.loads((out / "learning.json").read_text())
     svg, rrd = tmp_path / "map.svg", tmp_path / "map.rrd"
-    assert (
-        main(
-            [
-                "evaluate",
-                "--policy",
-                str(out),
-                "--episodes",
-                "2",
-                "--heat-map",
-                str(svg),
-                "--grid",
-                "3",
-                "--rerun",
-                str(rrd),
-            ]
-        )
-        == 0
-    )
+    assert main(["evaluate", "--policy", str(out), "--episodes", "2", "--heat-map", str(svg), "--grid", "3",
+                 "--rerun", str(rrd)]) == 0
     assert svg.read_text().count('class="cell"') == 3 and rrd.is_file()
     record = json.loads((out / "evaluation.json").read_text())
     assert len(record["heat_map"]["goal_rewards"][0]) == 3 and record["heat_map"]["observes_box"]
@@ -68,30 +40,20 @@ def test_learn_with_adr_then_a_heat_map(tmp_path, capsys):
     assert "--heat-map: expected a .svg file name" in _error_line(capsys)
 
 
-@pytest.mark.parametrize(
-    ("argv", "message"),
-    [
-        (["learn", "--env", "toolimit/Shovel3D-v0"], "--env: unknown id 'toolimit/Shovel3D-v0'"),
-        (["learn", "--task", "absent.npz"], "absent.npz: no such task file"),
-        (["learn", "--alignment", "absent"], "--alignment: needs --trajectory"),
-        (
-            ["learn", "--env", "toolimit/SpadePlanar-v0", "--robot", "ur5"],
-            "no shipped task for the spade in planar with robot ur5",
-        ),
-        (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
-        (
-            ["learn", "--env", "toolimit/SpadePlanar-v0", "--action-std", "0"],
-            "--action-std: must be a finite number > 0",
-        ),
-        (["evaluate", "--policy", "absent"], "--policy: no such folder"),
-        (["learn", "--env", "toolimit/HammerPlanar-v0", "--adr"], "the hammer scene has none (only the spades)"),
-        (["learn", "--env", "toolimit/SpadePlanar-v0", "--adr-every", "0"], "--adr-every: must be an integer >= 1"),
-        (
-            ["run", "--tool", "spade", "--robot", "panda", "--demo", "absent.npz", "--time-scale", "slow"],
-            "--time-scale: expected positive numbers",
-        ),
-    ],
-)
+@pytest.mark.parametrize(("argv", "message"), [
+    (["learn", "--env", "toolimit/Shovel3D-v0"], "--env: unknown id 'toolimit/Shovel3D-v0'"),
+    (["learn", "--task", "absent.npz"], "absent.npz: no such task file"),
+    (["learn", "--alignment", "absent"], "--alignment: needs --trajectory"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--robot", "ur5"],
+     "no shipped task for the spade in planar with robot ur5"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--action-std", "0"], "--action-std: must be a finite number > 0"),
+    (["evaluate", "--policy", "absent"], "--policy: no such folder"),
+    (["learn", "--env", "toolimit/HammerPlanar-v0", "--adr"], "the hammer scene has none (only the spades)"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--adr-every", "0"], "--adr-every: must be an integer >= 1"),
+    (["run", "--tool", "spade", "--robot", "panda", "--demo", "absent.npz", "--time-scale", "slow"],
+     "--time-scale: expected positive numbers"),
+])
 def test_bad_input_gets_one_line(tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
     try:
@@ -105,19 +67,6 @@ def test_bad_input_gets_one_line(tmp_path, capsys, monkeypatch, argv, message):
 
 def test_learn_from_a_missing_stage_output(tmp_path, capsys):
     (tmp_path / "alignment").mkdir()
-    assert (
-        main(
-            [
-                "learn",
-                "--alignment",
-                str(tmp_path / "alignment"),
-                "--trajectory",
-                str(tmp_path / "trajectory"),
-                "--out",
-                str(tmp_path / "out"),
-                *TINY,
-            ]
-        )
-        == 2
-    )
+    assert main(["learn", "--alignment", str(tmp_path / "alignment"), "--trajectory", str(tmp_path / "trajectory"),
+                 "--out", str(tmp_path / "out"), *TINY]) == 2
     assert "trajectory.npz: no such file" in _error_line(capsys)

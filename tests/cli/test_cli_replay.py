@@ -22,10 +22,8 @@ def write_poses(path: Path, frames: int = 109, **overrides) -> Path:
     """The scripted scoop for PARAMS (toolimit's tool frame) as a poses file."""
     motion = scripted_scoop({k: np.asarray(v, dtype=float) for k, v in PARAMS.items()})
     quaternions = np.array([pin.Quaternion(r).coeffs()[[3, 0, 1, 2]] for r in motion.rotation[:frames]])
-    np.savez(
-        path,
-        **({"tip_position": motion.position[:frames], "tip_quaternion_wxyz": quaternions, "fps": 24.0} | overrides),
-    )
+    np.savez(path, **({"tip_position": motion.position[:frames], "tip_quaternion_wxyz": quaternions, "fps": 24.0}
+                      | overrides))
     return path
 
 
@@ -44,23 +42,8 @@ def assert_user_error(capsys, argv: list[str], fragment: str, out: Path) -> None
 
 def test_replay_reports_the_goal_reward_of_every_replay(tmp_path: Path, capsys) -> None:
     poses, params, out = write_poses(tmp_path / "scoop.npz"), write_params(tmp_path / "p.json"), tmp_path / "r.json"
-    argv = [
-        "replay",
-        "--tool",
-        "spade",
-        "--world",
-        "3d",
-        "--poses",
-        str(poses),
-        "--params",
-        str(params),
-        "--replays",
-        "2",
-        "--seed",
-        "0",
-        "--json",
-        str(out),
-    ]
+    argv = ["replay", "--tool", "spade", "--world", "3d", "--poses", str(poses), "--params", str(params),
+            "--replays", "2", "--seed", "0", "--json", str(out)]
     assert main(argv) == 0
     assert "goal reward mean" in capsys.readouterr().out
     record = json.loads(out.read_text())
@@ -78,22 +61,8 @@ def test_replay_reads_the_authors_parameters_from_their_aligned_file(tmp_path: P
     if not REAL_SPADE.is_file():
         pytest.skip(f"the authors' spade recording is not available ({REAL_SPADE} missing)")
     out = tmp_path / "real.json"
-    argv = [
-        "replay",
-        "--tool",
-        "spade",
-        "--world",
-        "3d",
-        "--poses",
-        str(REAL_SPADE),
-        "--frame",
-        "original-spade",
-        "--params-from-poses",
-        "--replays",
-        "2",
-        "--json",
-        str(out),
-    ]
+    argv = ["replay", "--tool", "spade", "--world", "3d", "--poses", str(REAL_SPADE), "--frame", "original-spade",
+            "--params-from-poses", "--replays", "2", "--json", str(out)]
     assert main(argv) == 0
     record = json.loads(out.read_text())
     data = np.load(REAL_SPADE)
@@ -124,19 +93,9 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, capsys
     params = tmp_path / "p.json"
     params.write_text(change.get("params_text", json.dumps(PARAMS)))
     out = tmp_path / "out.json"
-    argv = [
-        "replay",
-        "--tool",
-        change.get("tool", "spade"),
-        "--world",
-        change.get("world", "3d"),
-        "--poses",
-        str(tmp_path / change["poses"]) if "poses" in change else str(poses),
-        "--replays",
-        change.get("replays", "2"),
-        "--json",
-        str(out),
-    ]
+    argv = ["replay", "--tool", change.get("tool", "spade"), "--world", change.get("world", "3d"),
+            "--poses", str(tmp_path / change["poses"]) if "poses" in change else str(poses),
+            "--replays", change.get("replays", "2"), "--json", str(out)]
     argv += ["--params-from-poses"] if change.get("from_poses") else ["--params", str(params)]
     if "html" in change:
         argv += ["--html", str(tmp_path / change["html"])]

@@ -26,20 +26,8 @@ def _write_poses(path: Path, steps: int = 12, **overrides) -> Path:
 
 
 def _args(source: list[str], out: Path, *extra: str) -> list[str]:
-    return [
-        "trajopt",
-        "--robot",
-        "planar3",
-        "--tool",
-        "spade",
-        *source,
-        "--out",
-        str(out),
-        "--quiet",
-        "--starts",
-        "2",
-        *extra,
-    ]
+    return ["trajopt", "--robot", "planar3", "--tool", "spade", *source, "--out", str(out), "--quiet",
+            "--starts", "2", *extra]
 
 
 def assert_user_error(capsys, argv: list[str], fragment: str, out: Path) -> None:
@@ -136,24 +124,8 @@ def test_bad_inputs_are_user_errors(capsys, tmp_path):
 def test_real_recording_in_the_original_spade_frame(tmp_path, video_demos_dir):
     out = tmp_path / "out"
     recording = video_demos_dir / "spade_example_aligned.npz"
-    argv = [
-        "trajopt",
-        "--robot",
-        "ur5",
-        "--tool",
-        "spade",
-        "--poses",
-        str(recording),
-        "--frame",
-        "original-spade",
-        "--out",
-        str(out),
-        "--quiet",
-        "--starts",
-        "1",
-        "--time-scale",
-        "2",
-    ]
+    argv = ["trajopt", "--robot", "ur5", "--tool", "spade", "--poses", str(recording),
+            "--frame", "original-spade", "--out", str(out), "--quiet", "--starts", "1", "--time-scale", "2"]
     assert main(argv) == 0
     result = TrajectoryResult.load(out)
     assert result.q.shape == (93, 6) and result.time_scale == 2.0 and result.dt == pytest.approx(2 / 24)

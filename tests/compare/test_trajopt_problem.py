@@ -64,11 +64,8 @@ def test_toolimit_robot_has_the_same_kinematics(trajopt_problem, panda_on_base):
 def test_targets_and_initial_guesses(trajopt_problem, panda_on_base, video_demos_dir):
     targets = trajopt_problem.load_targets(video_demos_dir / "spade_video1_aligned.npz")
     assert targets.positions.shape == (92, 3) and targets.rotations.shape == (92, 3, 3)
-    np.testing.assert_allclose(
-        np.einsum("tij,tik->tjk", targets.rotations, targets.rotations),
-        np.broadcast_to(np.eye(3), (92, 3, 3)),
-        atol=1e-12,
-    )
+    np.testing.assert_allclose(np.einsum("tij,tik->tjk", targets.rotations, targets.rotations),
+                               np.broadcast_to(np.eye(3), (92, 3, 3)), atol=1e-12)
     guesses = trajopt_problem.initial_base_guesses(panda_on_base, targets)
     centre = targets.positions[:, :2].mean(axis=0)
     assert guesses.shape == (8, 3)
@@ -108,13 +105,8 @@ def test_metrics_of_a_crafted_trajectory(trajopt_problem, panda_on_base):
     step1 = q0_arm + dt * np.array([2.175, 0, 0, 0, 0, 0, 0])  # joint 1 exactly at its velocity limit
     step2 = step1 + dt * np.array([0, 0, 0, 0, 0, 0, 2.7])  # joint 7 at 2.7 / 2.61 of its limit
     step2[3] = problem.upper[3] + 0.01  # and joint 4 (and its velocity) far beyond its limits
-    q_trajectory = np.vstack(
-        [
-            np.concatenate([[9.0, 9.0, 9.0], q0_arm]),  # q_0's base is only a guess
-            np.concatenate([base, step1]),
-            np.concatenate([base, step2]),
-        ]
-    )
+    q_trajectory = np.vstack([np.concatenate([[9.0, 9.0, 9.0], q0_arm]),  # q_0's base is only a guess
+                              np.concatenate([base, step1]), np.concatenate([base, step2])])
     metrics = trajopt_problem.trajectory_metrics(problem, q_trajectory, with_static_ik=True)
     assert metrics["limit_violation_steps"] == 1
     assert metrics["limit_violation_max_rad"] == pytest.approx(0.01)

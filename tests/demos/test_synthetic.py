@@ -27,9 +27,7 @@ def test_common_properties(tool, seed, fps):
     assert clean.head[:, 2].min() > 0.0 and clean.handle[:, 2].min() > 0.0
     assert clean.speed().max() < 4.5
     # Noise: a few mm everywhere but the outliers, which are 2-6 % of frames and off by > 5 cm.
-    error = np.maximum(
-        np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1)
-    )
+    error = np.maximum(np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1))
     inliers = np.setdiff1d(np.arange(clean.n_frames), motion.outlier_frames)
     assert 0.002 <= motion.jitter <= 0.005
     assert np.median(error[inliers]) < 0.012 and error[inliers].max() < 0.03

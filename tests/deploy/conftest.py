@@ -27,14 +27,8 @@ def write_trajectory(tmp_path: Path) -> Callable[..., Path]:
 
     def write(q: np.ndarray, dt: float, name: str = "trajopt") -> Path:
         directory = tmp_path / name
-        save_npz(
-            directory / "trajectory.npz",
-            q=q,
-            v=np.diff(q, axis=0) / dt,
-            base=np.array([0.2, -0.1, 1.5]),
-            joint_names=np.array(PANDA_JOINTS),
-            dt=dt,
-        )
+        save_npz(directory / "trajectory.npz", q=q, v=np.diff(q, axis=0) / dt, base=np.array([0.2, -0.1, 1.5]),
+                 joint_names=np.array(PANDA_JOINTS), dt=dt)
         return directory
 
     return write

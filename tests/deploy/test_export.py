@@ -137,10 +137,8 @@ def test_too_fast_everywhere_is_retimed_and_respects_every_limit(write_trajector
 def test_refuses_a_path_sample_outside_a_position_limit(write_trajectory, tmp_path):
     q = slow_smooth()
     q[:, 3] = -1.5 + bump(1.5, 2 * np.pi / 4.0, DT * np.arange(len(q)))  # joint 4 up to 0 at 2 s > -0.0698
-    message = (
-        r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0698 rad "
-        r"by 0\.0698 rad .*no retiming can fix .*\(9 of 97 samples are outside\)"
-    )
+    message = (r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0698 rad "
+               r"by 0\.0698 rad .*no retiming can fix .*\(9 of 97 samples are outside\)")
     with pytest.raises(PathOutsideLimits, match=message):
         export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
     assert not (tmp_path / "out").exists()
@@ -166,34 +164,16 @@ def test_unsupported_robot_and_bad_files_are_refused(write_trajectory, tmp_path)
     bad = tmp_path / "bad"
     bad.mkdir()
     q = slow_smooth()
-    np.savez(
-        bad / "trajectory.npz",
-        q=q,
-        v=np.diff(q, axis=0) / DT * 1.01,
-        base=np.zeros(3),
-        joint_names=np.array(PANDA_JOINTS),
-        dt=DT,
-    )
+    np.savez(bad / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT * 1.01, base=np.zeros(3),
+             joint_names=np.array(PANDA_JOINTS), dt=DT)
     with pytest.raises(ValueError, match=r"trajectory.npz: v\[.*differs from"):
         load_trajectory(bad)
-    np.savez(
-        bad / "trajectory.npz",
-        q=q,
-        v=np.diff(q, axis=0) / DT,
-        base=np.zeros(2),
-        joint_names=np.array(PANDA_JOINTS),
-        dt=DT,
-    )
+    np.savez(bad / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.zeros(2),
+             joint_names=np.array(PANDA_JOINTS), dt=DT)
     with pytest.raises(ValueError, match=r"base must have shape \(3,\)"):
         load_trajectory(bad)
-    np.savez(
-        bad / "trajectory.npz",
-        q=q,
-        v=np.diff(q, axis=0) / DT,
-        base=np.zeros(3),
-        joint_names=np.array([f"j{i}" for i in range(7)]),
-        dt=DT,
-    )
+    np.savez(bad / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.zeros(3),
+             joint_names=np.array([f"j{i}" for i in range(7)]), dt=DT)
     with pytest.raises(ValueError, match="do not match panda's joints"):
         export_trajectory(load_trajectory(bad), "panda", tmp_path / "out")
     with pytest.raises(ValueError, match="subdivisions must be a positive integer"):
@@ -218,19 +198,8 @@ def test_a_panda_policys_rollout_exports_within_the_published_limits(tmp_path):
     from toolimit.learn.training import load_policy
 
     learned = tmp_path / "learned"
-    tiny = [
-        "--timesteps",
-        "0",
-        "--envs",
-        "2",
-        "--clone-rollouts",
-        "1",
-        "--clone-steps",
-        "50",
-        "--value-steps",
-        "10",
-        "--quiet",
-    ]
+    tiny = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "1", "--clone-steps", "50", "--value-steps", "10",
+            "--quiet"]
     assert main(["learn", "--env", "toolimit/Spade3D-v0", "--out", str(learned), *tiny]) == 0
     model, task = load_policy(learned)
     rollout = evaluate(model, task, episodes=1, deterministic=True, seed=3).joint_positions[0]

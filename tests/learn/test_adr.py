@@ -19,19 +19,8 @@ from toolimit.learn.heat_map import goal_box_heat_map
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
 from toolimit.viz.svg_heat_map import heat_map_svg
 
-TINY = LearningConfig(
-    timesteps=0,
-    envs=2,
-    preset="toolimit",
-    clone_rollouts=2,
-    clone_noise=0.3,
-    clone_steps=20,
-    value_steps=20,
-    checkpoint_every=1,
-    seed=0,
-    adr=True,
-    adr_every=1,
-)
+TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20,
+                      value_steps=20, checkpoint_every=1, seed=0, adr=True, adr_every=1)
 
 
 def _parameters(model):
@@ -135,9 +124,8 @@ def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, m
     per_update = spade_task.horizon * 2
     three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
-    learn_policy(
-        spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}), progress=False
-    )
+    learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
+                 progress=False)
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     assert resumed.record["resumed"]
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
@@ -147,10 +135,8 @@ def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, m
     # x grows away from the deposit only: 0.05 m towards it, the box would stand on it
     assert whole.record["adr"]["range_m"][0] == pytest.approx(DELTA * sum(t["side"] == "low" for t in tests))
     assert whole.record["adr"]["range_m"][0] > 0, "seed 0 pushes once, so the environment is reset mid-run"
-    curves = [
-        [json.loads(line) for line in (tmp_path / name / CURVE_JSONL).read_text().splitlines()]
-        for name in ("whole", "split")
-    ]
+    curves = [[json.loads(line) for line in (tmp_path / name / CURVE_JSONL).read_text().splitlines()]
+              for name in ("whole", "split")]
     assert curves[0] == [c | {"approx_kl": curves[0][k]["approx_kl"]} for k, c in enumerate(curves[1])]
     assert curves[0][0]["adr_low"] == curves[0][0]["adr_high"] == whole.record["adr"]["aligned"]
     saved = json.loads((tmp_path / "whole" / "learning.json").read_text())["adr"]

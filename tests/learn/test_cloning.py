@@ -28,7 +28,7 @@ def test_tracking_controller_rollout_succeeds_and_noisy_rollouts_are_relabelled(
     assert np.all(np.abs(data.actions) <= 1.0)
     clean = collect_demonstrations(spade_task, rollouts=1, seed=0)
     np.testing.assert_array_equal(clean.observations, data.observations[:horizon])
-    assert not np.allclose(data.observations[horizon : 2 * horizon], clean.observations)  # other states visited
+    assert not np.allclose(data.observations[horizon:2 * horizon], clean.observations)  # other states visited
 
 
 def test_discounted_returns():
@@ -104,14 +104,8 @@ def test_on_loss_receives_every_steps_loss(spade_task):
     model = _model(spade_task)
     data = collect_demonstrations(spade_task, rollouts=1, seed=0)
     seen = []
-    report = clone(
-        model.policy,
-        data,
-        steps=5,
-        value_steps=3,
-        progress=False,
-        on_loss=lambda phase, step, loss: seen.append((phase, step, loss)),
-    )
+    report = clone(model.policy, data, steps=5, value_steps=3, progress=False,
+                   on_loss=lambda phase, step, loss: seen.append((phase, step, loss)))
     assert [(phase, step) for phase, step, _ in seen] == [("cloning", k) for k in range(5)] + [
         ("value warm-up", k) for k in range(3)
     ]

@@ -63,9 +63,8 @@ def test_action_is_a_fraction_of_the_velocity_limit_and_joints_stay_in_limits(sp
     simulator = env.simulator
     before = simulator.q[0].copy()
     env.step(np.full(simulator.n_joints, 0.5, dtype=np.float32))
-    expected = np.clip(
-        before + 0.5 * simulator.robot.velocity_limit * simulator.dt, simulator.robot.lower, simulator.robot.upper
-    )
+    expected = np.clip(before + 0.5 * simulator.robot.velocity_limit * simulator.dt, simulator.robot.lower,
+                       simulator.robot.upper)
     np.testing.assert_allclose(simulator.q[0], expected)
     for _ in range(60):
         env.step(np.ones(simulator.n_joints, dtype=np.float32))

@@ -49,8 +49,7 @@ def test_horizon_covers_the_reference_and_lets_the_reference_succeed(spade_task)
     """The shipped spade's reference succeeds within its horizon (measured, not assumed)."""
     assert spade_task.reference_steps <= spade_task.horizon <= 2 * spade_task.reference_steps
     robot, scene = make_robot(spade_task.robot, spade_task.tool), make_scene("spade", "planar")
-    horizon = success_horizon(
-        robot, scene, spade_task.params, spade_task.base, spade_task.reference_q, np.random.default_rng(0)
-    )
+    horizon = success_horizon(robot, scene, spade_task.params, spade_task.base, spade_task.reference_q,
+                              np.random.default_rng(0))
     assert horizon == spade_task.horizon
     assert bool(scene.is_success()[0])

@@ -34,30 +34,18 @@ def spade_rotation(elevation: float) -> np.ndarray:
 def pen(inner: float, height: float, thickness: float = 0.01) -> StaticBoxes:
     """Four walls around the square [-inner/2, inner/2]^2 on the ground."""
     h, t = inner / 2, thickness
-    centers = np.array(
-        [
-            [-h - t / 2, 0, height / 2],
-            [h + t / 2, 0, height / 2],
-            [0, -h - t / 2, height / 2],
-            [0, h + t / 2, height / 2],
-        ]
-    )
-    halves = np.array(
-        [[t / 2, h + t, height / 2], [t / 2, h + t, height / 2], [h, t / 2, height / 2], [h, t / 2, height / 2]]
-    )
+    centers = np.array([[-h - t / 2, 0, height / 2], [h + t / 2, 0, height / 2],
+                        [0, -h - t / 2, height / 2], [0, h + t / 2, height / 2]])
+    halves = np.array([[t / 2, h + t, height / 2], [t / 2, h + t, height / 2],
+                       [h, t / 2, height / 2], [h, t / 2, height / 2]])
     return StaticBoxes(centers, np.repeat(np.eye(3)[None], 4, 0), halves)
 
 
 def on_blade(world: ParticleWorld) -> np.ndarray:
     """(B, N) bool: sphere centres over the spade's carrying face, inside its rim (tool frame)."""
     local = (world.positions - world.tool_position[:, None]) @ world.tool_rotation
-    return (
-        (local[..., 0] > 0)
-        & (local[..., 0] < SPADE_RIM_HEIGHT + R)
-        & (np.abs(local[..., 1]) < SPADE_BLADE_WIDTH / 2)
-        & (local[..., 2] > 0)
-        & (local[..., 2] < SPADE_BLADE_LENGTH)
-    )
+    return ((local[..., 0] > 0) & (local[..., 0] < SPADE_RIM_HEIGHT + R) & (np.abs(local[..., 1]) < SPADE_BLADE_WIDTH / 2)
+            & (local[..., 2] > 0) & (local[..., 2] < SPADE_BLADE_LENGTH))
 
 
 def test_single_sphere_falls_with_g() -> None:
@@ -128,9 +116,8 @@ def test_blade_at_4_m_s_pushes_spheres_and_none_tunnels(substeps: int) -> None:
 def test_spheres_thrown_at_a_wall_at_4_and_6_m_s_do_not_pass() -> None:
     walls = pen(0.6, 0.8)  # inner x in [-0.3, 0.3], walls 1 cm thick
     y = np.linspace(-0.2, 0.2, 5)
-    start = np.concatenate(
-        [np.stack([np.full(5, 0.1), y, np.full(5, 0.4)], -1), np.stack([np.full(5, -0.1), y, np.full(5, 0.5)], -1)]
-    )[None]
+    start = np.concatenate([np.stack([np.full(5, 0.1), y, np.full(5, 0.4)], -1),
+                            np.stack([np.full(5, -0.1), y, np.full(5, 0.5)], -1)])[None]
     velocity = np.zeros_like(start)
     velocity[0, :5, 0], velocity[0, 5:, 0] = 4.0, -6.0
     world = ParticleWorld(MATERIAL, walls, None)

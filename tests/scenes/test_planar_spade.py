@@ -202,11 +202,8 @@ def test_real_video_spade_motion_fills_a_box_placed_where_it_tips(video_demos_di
     sand = np.array([-0.75, 0.0, 0.0])
     for goal_x, expected in ((0.0, "some"), (3.0, "none")):
         scene = PlanarSpadeScene()
-        scene.reset(
-            {"sand_position": sand, "goal_position": np.array([goal_x, 0.0, 0.0])},
-            np.random.default_rng(0),
-            batch_size=3,
-        )
+        scene.reset({"sand_position": sand, "goal_position": np.array([goal_x, 0.0, 0.0])},
+                    np.random.default_rng(0), batch_size=3)
         run(scene, poses)
         if expected == "some":  # instances vary (about 1 to 13 circles over seeds): test the mean
             assert scene.goal_reward().mean() >= 3, scene.goal_reward()

@@ -18,30 +18,21 @@ from toolimit.scenes.base import (
 )
 
 SPECS = (
-    ParameterSpec(
-        "box",
-        "position",
-        (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.1),
-        (WORLD_HALF_SIZE,) * 2 + (2.0,),
-        axes=(0, 2),
-        bound_reason="the box stands above the floor",
-    ),
+    ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.1), (WORLD_HALF_SIZE,) * 2 + (2.0,),
+                  axes=(0, 2), bound_reason="the box stands above the floor"),
     ParameterSpec("yaw", "uniform", -np.pi, np.pi),
 )
 GOOD = {"box": np.array([1.0, 9.0, 0.5]), "yaw": 0.3}  # y is not one of the checked axes
 
 
-@pytest.mark.parametrize(
-    ("change", "message"),
-    [
-        ({}, None),
-        ({"box": np.array([6.0, 0.0, 0.5])}, "box x = 6.000 m is outside the world bound [-5, 5] m (the box stands"),
-        ({"box": np.array([0.0, 0.0, 0.0])}, "box z = 0.000 m is outside the world bound [0.1, 2] m"),
-        ({"box": np.array([0.0, np.nan, 0.5])}, "must be a finite (3,) world point"),
-        ({"box": np.zeros(2)}, "of shape (2,)"),
-        ({"yaw": 4.0}, "yaw must be a number in [-3.142, 3.142], got 4.0"),
-    ],
-)
+@pytest.mark.parametrize(("change", "message"), [
+    ({}, None),
+    ({"box": np.array([6.0, 0.0, 0.5])}, "box x = 6.000 m is outside the world bound [-5, 5] m (the box stands"),
+    ({"box": np.array([0.0, 0.0, 0.0])}, "box z = 0.000 m is outside the world bound [0.1, 2] m"),
+    ({"box": np.array([0.0, np.nan, 0.5])}, "must be a finite (3,) world point"),
+    ({"box": np.zeros(2)}, "of shape (2,)"),
+    ({"yaw": 4.0}, "yaw must be a number in [-3.142, 3.142], got 4.0"),
+])
 def test_parameter_violation_names_the_parameter_the_axis_and_the_bound(change, message):
     reason = parameter_violation(SPECS, {**GOOD, **change})
     assert reason is None if message is None else message in reason
@@ -49,16 +40,9 @@ def test_parameter_violation_names_the_parameter_the_axis_and_the_bound(change, 
 
 def test_world_position_spans_the_world_in_x_y_and_stands_on_the_ground_unless_raised():
     ground = world_position("box", "a box", axes=(0, 1))
-    assert ground == ParameterSpec(
-        "box",
-        "position",
-        (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
-        (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0),
-        on_ground=True,
-        unit="m",
-        description="a box",
-        axes=(0, 1),
-    )
+    assert ground == ParameterSpec("box", "position", (-WORLD_HALF_SIZE, -WORLD_HALF_SIZE, 0.0),
+                                   (WORLD_HALF_SIZE, WORLD_HALF_SIZE, 0.0), on_ground=True, unit="m",
+                                   description="a box", axes=(0, 1))
     raised = world_position("box", "a box", low_z=0.1, high_z=2.0, axes=(0, 2), bound_reason="above the floor")
     assert not raised.on_ground and raised.low == SPECS[0].low and raised.high == SPECS[0].high
 

@@ -161,9 +161,7 @@ def test_invalid_parameters_are_rejected_with_a_reason():
 
 def test_footprint_and_snapshot():
     scene = fresh(yaw=0.3)
-    np.testing.assert_allclose(
-        scene.footprints({"grass_position": PATCH, "grass_yaw": 0.3}), [[1.0, -0.5, 0.2, 0.15, 0.3]]
-    )
+    np.testing.assert_allclose(scene.footprints({"grass_position": PATCH, "grass_yaw": 0.3}), [[1.0, -0.5, 0.2, 0.15, 0.3]])
     straight_sweep(scene, 3.0, height=0.05)
     snap = scene.snapshot()
     assert snap["stalk_base"].shape == (scene.n_stalks, 3)

@@ -52,11 +52,8 @@ def test_registry_builds_the_scene_and_it_follows_the_protocol() -> None:
     assert (scene.tool, scene.world, scene.n_spheres) == ("spade", "3d", 40)
     assert scene.control_dt == pytest.approx(1 / 24)
     kinds = {p.name: (p.kind, p.on_ground) for p in scene.parameters}
-    assert kinds == {
-        "sand_position": ("position", True),
-        "sand_yaw": ("uniform", True),
-        "goal_position": ("position", True),
-    }
+    assert kinds == {"sand_position": ("position", True), "sand_yaw": ("uniform", True),
+                     "goal_position": ("position", True)}
     assert SpatialSpadeScene().n_spheres == 200, "the original scene's 200 spheres are the default"
     with pytest.raises(ValueError, match="n_spheres"):
         SpatialSpadeScene(n_spheres=MAX_SPHERES + 1)

@@ -35,29 +35,22 @@ def authors_motion(name: str) -> tuple[ToolPose, dict]:
         pytest.skip(f"the authors' spade recordings are not available ({path} missing)")
     data = np.load(path)
     targets = from_original_spade_tip(load_pose_targets(path))
-    params = {
-        "sand_position": data["sand_buffer_position"],
-        "sand_yaw": float(data["sand_buffer_yaw"]),
-        "goal_position": data["goal_box_position"],
-    }
+    params = {"sand_position": data["sand_buffer_position"], "sand_yaw": float(data["sand_buffer_yaw"]),
+              "goal_position": data["goal_box_position"]}
     return ToolPose(targets.positions, targets.rotations), params
 
 
 def assert_static_surfaces_win(scene: SpatialSpadeScene, step: int) -> None:
     """No centre below r - 1 mm; no centre within r - 1 mm of a wall box (all instances)."""
     positions = scene.sphere_positions
-    assert positions[..., 2].min() >= R - TOLERANCE, (
-        f"a sphere is {R - positions[..., 2].min():.4f} m into the ground at step {step}"
-    )
+    assert positions[..., 2].min() >= R - TOLERANCE, f"a sphere is {R - positions[..., 2].min():.4f} m into the ground at step {step}"
     walls = scene.walls
     local = np.einsum("bnkj,kja->bnka", positions[:, :, None] - walls.centers, walls.rotations)
     outside = np.maximum(np.abs(local) - walls.half_extents, 0.0)
     distance = np.linalg.norm(outside, axis=-1)
     assert distance.min() >= R - TOLERANCE, f"a sphere is {R - distance.min():.4f} m into a wall at step {step}"
     assert np.all(scene.static_penetration() <= TOLERANCE)
-    assert scene.static_penetration() == pytest.approx(
-        np.maximum(R - np.minimum(positions[..., 2], distance.min(-1)).min(1), 0.0)
-    )
+    assert scene.static_penetration() == pytest.approx(np.maximum(R - np.minimum(positions[..., 2], distance.min(-1)).min(1), 0.0))
 
 
 def run_checked(scene: SpatialSpadeScene, motion: ToolPose) -> list[float]:

@@ -25,24 +25,10 @@ from toolimit.tools import TOOLS, tool_poses, tool_spec
 def _bounds(shapes) -> tuple[np.ndarray, np.ndarray]:
     """Tool-frame bounding box (low, high) of all boxes (axis-aligned here) and capsules."""
     radii = shapes.capsule_radii[:, None]
-    low = np.min(
-        np.concatenate(
-            [
-                shapes.box_centers - shapes.box_half_extents,
-                np.minimum(shapes.capsule_starts, shapes.capsule_ends) - radii,
-            ]
-        ),
-        0,
-    )
-    high = np.max(
-        np.concatenate(
-            [
-                shapes.box_centers + shapes.box_half_extents,
-                np.maximum(shapes.capsule_starts, shapes.capsule_ends) + radii,
-            ]
-        ),
-        0,
-    )
+    low = np.min(np.concatenate([shapes.box_centers - shapes.box_half_extents,
+                                 np.minimum(shapes.capsule_starts, shapes.capsule_ends) - radii]), 0)
+    high = np.max(np.concatenate([shapes.box_centers + shapes.box_half_extents,
+                                  np.maximum(shapes.capsule_starts, shapes.capsule_ends) + radii]), 0)
     return low, high
 
 
@@ -58,7 +44,7 @@ def test_numpy_shapes_and_pinocchio_model_describe_the_same_geometry(tool: str) 
         np.testing.assert_allclose(obj.placement.translation, box.center)
         np.testing.assert_allclose(obj.placement.rotation, box.rotation)
         assert obj.meshColor.shape == (4,)
-    for capsule, obj in zip(shapes.capsules, model.geometryObjects[len(shapes.boxes) :]):
+    for capsule, obj in zip(shapes.capsules, model.geometryObjects[len(shapes.boxes):]):
         assert isinstance(obj.geometry, coal.Capsule)
         assert obj.geometry.radius == pytest.approx(capsule.radius)
         assert obj.geometry.halfLength == pytest.approx(capsule.half_length)
@@ -131,12 +117,8 @@ def test_signed_distances_match_coal_for_posed_tool_shapes() -> None:
         for point, d, nrm in zip(points, distance, normal):
             result.clear()
             reference = coal.distance(
-                coal.Box(*(2 * box.half_extents)),
-                coal.Transform3s(placement.rotation, placement.translation),
-                sphere,
-                coal.Transform3s(np.eye(3), point),
-                request,
-                result,
+                coal.Box(*(2 * box.half_extents)), coal.Transform3s(placement.rotation, placement.translation),
+                sphere, coal.Transform3s(np.eye(3), point), request, result,
             )
             assert d == pytest.approx(reference, abs=1e-6)
             assert np.linalg.norm(nrm) == pytest.approx(1.0)
@@ -146,11 +128,7 @@ def test_signed_distances_match_coal_for_posed_tool_shapes() -> None:
     for point, d in zip(points, distance):
         result.clear()
         reference = coal.distance(
-            coal.Capsule(capsule.radius, 2 * capsule.half_length),
-            coal.Transform3s(pose.rotation, middle),
-            sphere,
-            coal.Transform3s(np.eye(3), point),
-            request,
-            result,
+            coal.Capsule(capsule.radius, 2 * capsule.half_length), coal.Transform3s(pose.rotation, middle),
+            sphere, coal.Transform3s(np.eye(3), point), request, result,
         )
         assert d == pytest.approx(reference, abs=1e-6)

@@ -34,13 +34,8 @@ def test_rollout_respects_the_limits(panda):
 def test_track_runs_every_initialisation(planar3):
     path = reachable_path(planar3, 12)
     targets = targets_of(planar3, path, np.array([0.2, 0.0, 0.0]))
-    options = TrackOptions(
-        sqp=SqpOptions(max_iterations=10),
-        starts=2,
-        q_start=path[0],
-        initialisations=("hold", "rollout"),
-        merge_distance=0.0,
-    )
+    options = TrackOptions(sqp=SqpOptions(max_iterations=10), starts=2, q_start=path[0],
+                           initialisations=("hold", "rollout"), merge_distance=0.0)
     result = track(planar3, targets, options)
     assert len(result.statistics.start_costs) == 4
     assert result.statistics.initialisation in ("hold", "rollout")

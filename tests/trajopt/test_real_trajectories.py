@@ -36,9 +36,7 @@ def test_robot_tracks_the_real_spade_trajectory(video_demos_dir, robot_name, rec
 
     reachable = reachable_steps(robot, result.base, targets.positions, result.q[1:])
     share = float(reachable.mean())
-    print(
-        f"{robot_name} {recording}: reachable share {share:.2f}, median position error on reachable steps "
-        f"{np.median(result.position_error[reachable]) * 100:.1f} cm"
-    )
+    print(f"{robot_name} {recording}: reachable share {share:.2f}, median position error on reachable steps "
+          f"{np.median(result.position_error[reachable]) * 100:.1f} cm")
     assert share >= MIN_REACHABLE_SHARE[robot_name]
     assert np.median(result.position_error[reachable]) < 0.25

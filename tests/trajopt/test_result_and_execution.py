@@ -142,18 +142,9 @@ def test_replay_in_the_planar_hammer_scene():
     base = np.array([-0.3, 0.0, 0.0])
     targets = targets_of(arm, path, base)
     exact = TrajectoryResult(
-        robot=arm.name,
-        tool="hammer",
-        joint_names=arm.joint_names,
-        q=path,
-        v=np.diff(path, axis=0) * FPS,
-        base=base,
-        dt=1 / FPS,
-        time_scale=1.0,
-        position_error=np.zeros(12),
-        rotation_error=np.zeros(12),
-        limit_margin=np.minimum(path - arm.lower, arm.upper - path),
-        velocity_ratio=np.zeros((12, 3)),
+        robot=arm.name, tool="hammer", joint_names=arm.joint_names, q=path, v=np.diff(path, axis=0) * FPS, base=base,
+        dt=1 / FPS, time_scale=1.0, position_error=np.zeros(12), rotation_error=np.zeros(12),
+        limit_margin=np.minimum(path - arm.lower, arm.upper - path), velocity_ratio=np.zeros((12, 3)),
     )
     scene = make_scene("hammer", "planar")
     params = {"nail_position": np.array([targets.positions[-1, 0], 0.0, 0.1])}
@@ -171,23 +162,13 @@ def test_a_result_turned_half_a_turn_is_described_as_upside_down():
     from toolimit.trajopt import TrajectoryResult
 
     horizon = 6
-
     def result(rotation_error):
         return TrajectoryResult(
-            robot="planar3",
-            tool="spade",
-            joint_names=("a", "b", "c"),
-            q=np.zeros((horizon + 1, 3)),
-            v=np.zeros((horizon, 3)),
-            base=np.zeros(3),
-            dt=0.1,
-            time_scale=1.0,
-            position_error=np.full(horizon, 0.002),
-            rotation_error=rotation_error,
-            limit_margin=np.ones((horizon + 1, 3)),
-            velocity_ratio=np.zeros((horizon, 3)),
+            robot="planar3", tool="spade", joint_names=("a", "b", "c"), q=np.zeros((horizon + 1, 3)),
+            v=np.zeros((horizon, 3)), base=np.zeros(3), dt=0.1, time_scale=1.0,
+            position_error=np.full(horizon, 0.002), rotation_error=rotation_error,
+            limit_margin=np.ones((horizon + 1, 3)), velocity_ratio=np.zeros((horizon, 3)),
         )
-
     flipped = result(np.full(horizon, np.pi))
     assert flipped.upside_down and flipped.summary()["upside_down"]
     assert "position error median 0.2 cm, rotation error median 180 deg" in flipped.describe()

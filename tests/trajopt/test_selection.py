@@ -51,22 +51,8 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
     trajectory, replayed in the planar scene, moves sand into the goal box."""
     _, alignment = spade_alignment
     out = tmp_path / "planar3"
-    argv = [
-        "trajopt",
-        "--robot",
-        "planar3",
-        "--tool",
-        "spade",
-        "--alignment",
-        str(alignment),
-        "--velocity-weight",
-        "1e-4",
-        "--init",
-        "hold",
-        "--quiet",
-        "--out",
-        str(out),
-    ]
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment),
+            "--velocity-weight", "1e-4", "--init", "hold", "--quiet", "--out", str(out)]
     assert main(argv) == 0, capsys.readouterr().err
     selection = json.loads((out / "selection.json").read_text())
     best = selection["candidates"][selection["best"]]
@@ -87,26 +73,9 @@ def test_planar_arm_replay_of_the_selected_candidate_earns_reward(spade_alignmen
 def test_selection_keeps_the_time_scale_whose_robot_replay_earns_most(spade_alignment, tmp_path, capsys):
     _, alignment = spade_alignment
     out = tmp_path / "planar3"
-    argv = [
-        "trajopt",
-        "--robot",
-        "planar3",
-        "--tool",
-        "spade",
-        "--alignment",
-        str(alignment),
-        "--velocity-weight",
-        "1e-4",
-        "--init",
-        "hold",
-        "--starts",
-        "2",
-        "--time-scale",
-        "2,1",
-        "--quiet",
-        "--out",
-        str(out),
-    ]
+    argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment),
+            "--velocity-weight", "1e-4", "--init", "hold", "--starts", "2", "--time-scale", "2,1", "--quiet",
+            "--out", str(out)]
     assert main(argv) == 0, capsys.readouterr().err
     selection = json.loads((out / "selection.json").read_text())
     for entry in selection["candidates"]:
@@ -126,26 +95,9 @@ def test_selection_is_the_same_with_two_worker_processes(spade_alignment, tmp_pa
     records = []
     for workers in ("1", "2"):
         out = tmp_path / f"workers{workers}"
-        argv = [
-            "trajopt",
-            "--robot",
-            "planar3",
-            "--tool",
-            "spade",
-            "--alignment",
-            str(alignment),
-            "--velocity-weight",
-            "1e-4",
-            "--init",
-            "hold",
-            "--starts",
-            "2",
-            "--quiet",
-            "--workers",
-            workers,
-            "--out",
-            str(out),
-        ]
+        argv = ["trajopt", "--robot", "planar3", "--tool", "spade", "--alignment", str(alignment),
+                "--velocity-weight", "1e-4", "--init", "hold", "--starts", "2", "--quiet", "--workers", workers,
+                "--out", str(out)]
         assert main(argv) == 0, capsys.readouterr().err
         records.append(json.loads((out / "selection.json").read_text()))
     assert records[0] == records[1]  # same machine, same process type: bit for bit

@@ -46,9 +46,8 @@ def test_hard_limits_hold_exactly_when_targets_ask_for_more(planar3):
     path[12:, 0] += 0.6  # joint 1 jumps: far above its velocity limit
     targets = targets_of(arm, path, np.zeros(3))
     options = SqpOptions(max_iterations=30)
-    relaxed = dataclasses.replace(
-        arm, lower=arm.lower - 2.0, upper=arm.upper + 2.0, velocity_limit=arm.velocity_limit * 20
-    )
+    relaxed = dataclasses.replace(arm, lower=arm.lower - 2.0, upper=arm.upper + 2.0,
+                                  velocity_limit=arm.velocity_limit * 20)
     relaxed_problem = TrackingProblem(relaxed, targets, 1 / FPS, q_start=path[0], weights=PRECISE)
     loose = solve_sqp(relaxed_problem, np.zeros(3), options)
     loose_v = np.diff(loose.q, axis=0) * FPS

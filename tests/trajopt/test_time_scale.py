@@ -20,9 +20,8 @@ def test_picks_the_smallest_scale_that_tracks_a_too_fast_demonstration(planar3):
     fast_velocity = np.abs(np.diff(fast, axis=0)).max(axis=0) * 24 / planar3.velocity_limit
     assert fast_velocity.max() > 1.5
     targets = targets_of(planar3, fast, np.array([0.1, 0.0, 0.0]))
-    options = TrackOptions(
-        weights=TrackingWeights(velocity=1e-6), sqp=SqpOptions(max_iterations=25), starts=2, q_start=fast[0]
-    )
+    options = TrackOptions(weights=TrackingWeights(velocity=1e-6), sqp=SqpOptions(max_iterations=25), starts=2,
+                           q_start=fast[0])
     result = choose_time_scale(planar3, targets, options, grid=(3.0, 1.0, 2.0))
     search = result.statistics.time_scale_search
     assert result.time_scale == 2.0
@@ -36,27 +35,14 @@ def test_returns_the_best_scale_when_none_meets_the_threshold(monkeypatch, plana
     medians = {1.0: 0.05, 1.5: 0.03, 2.0: 0.04}
 
     statistics = TrackingStatistics(
-        cost=1.0,
-        initial_cost=2.0,
-        cost_terms={"total": 1.0},
-        iterations=1,
-        qp_iterations=1,
-        converged=True,
-        start_index=0,
-        roll_variant=0,
-        initialisation="hold",
-        start_costs=(1.0,),
-        starts_rejected_in_footprints=0,
-        starts_merged=0,
-        wall_time_s=0.0,
-        best_start_wall_time_s=0.0,
-        weights=TrackingWeights(),
+        cost=1.0, initial_cost=2.0, cost_terms={"total": 1.0}, iterations=1, qp_iterations=1, converged=True,
+        start_index=0, roll_variant=0, initialisation="hold", start_costs=(1.0,), starts_rejected_in_footprints=0,
+        starts_merged=0, wall_time_s=0.0, best_start_wall_time_s=0.0, weights=TrackingWeights(),
     )
 
     def fake_track(robot, targets, options, rng=None):
         return dataclasses.make_dataclass("R", ["position_error", "time_scale", "statistics"])(
-            np.full(5, medians[options.time_scale]), options.time_scale, statistics
-        )
+            np.full(5, medians[options.time_scale]), options.time_scale, statistics)
 
     monkeypatch.setattr(time_scale_module, "track", fake_track)
     result = choose_time_scale(planar3, None, TrackOptions(), grid=(1.0, 1.5, 2.0))

@@ -17,7 +17,6 @@ QUICK = SqpOptions(max_iterations=15)
 #: One joint initialisation per base start: these tests count and compare the starts themselves.
 HOLD = ("hold",)
 
-
 def test_base_guesses_follow_the_benchmark_scheme():
     """PROBLEM.md: ring of 8 at 0.6 m around the targets' centre, guess 0 towards the origin, and
     the tip of the start pose on the ray from the base to the centre."""
@@ -95,7 +94,8 @@ def test_bases_inside_scene_footprints_are_rejected(planar3):
     options = TrackOptions(sqp=QUICK, q_start=path[0], merge_distance=0.0, initialisations=HOLD)
     free = track(planar3, targets, options, guesses=guesses)
     around_best = np.array([[free.base[0], 0.0, 0.01, 5.0, 0.0]])
-    options = TrackOptions(sqp=QUICK, q_start=path[0], footprints=around_best, merge_distance=0.0, initialisations=HOLD)
+    options = TrackOptions(sqp=QUICK, q_start=path[0], footprints=around_best, merge_distance=0.0,
+                           initialisations=HOLD)
     try:
         restricted = track(planar3, targets, options, guesses=guesses)
     except ValueError as error:

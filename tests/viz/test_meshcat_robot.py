@@ -74,9 +74,8 @@ def test_trajectory_html_animates_robot_tool_and_targets(tmp_path, html_commands
     assert {"/meshcat/tool/visuals/spade/blade", "/meshcat/tool/visuals/spade/handle"} <= objects
     assert {f"/meshcat/{REACHED_TRIAD}", f"/meshcat/{CURRENT_TARGET}", f"/meshcat/{TARGET_PATH}"} <= objects
     assert {p for p in objects if p.split("/")[-1].isdigit()} == {f"/meshcat/targets/{k}" for k in (0, 2, 4)}
-    np.testing.assert_allclose(
-        static_transform(commands, "/meshcat/robot"), base_placement(robot, trajectory.base), atol=1e-6
-    )
+    np.testing.assert_allclose(static_transform(commands, "/meshcat/robot"), base_placement(robot, trajectory.base),
+                               atol=1e-6)
 
     clips = clips_of(commands)
     assert clips["/meshcat/tool"]["fps"] == pytest.approx(1.0 / DT)
@@ -113,20 +112,10 @@ def test_mesh_visual_model_locks_the_same_joints_as_the_robot():
 def test_trajectory_replayed_in_a_scene(tmp_path, html_commands):
     robot, trajectory, targets = make_trajectory("panda")
     head, _ = robot.tool_pose(trajectory.q[0], trajectory.base)
-    params = {
-        "sand_position": np.array([head[0], head[1], 0.0]),
-        "sand_yaw": 0.0,
-        "goal_position": np.array([head[0] + 0.5, head[1], 0.0]),
-    }
-    path = trajectory_in_scene_html(
-        tmp_path / "scene.html",
-        robot,
-        trajectory,
-        SpatialSpadeScene(n_spheres=30),
-        params,
-        np.random.default_rng(0),
-        targets,
-    )
+    params = {"sand_position": np.array([head[0], head[1], 0.0]), "sand_yaw": 0.0,
+              "goal_position": np.array([head[0] + 0.5, head[1], 0.0])}
+    path = trajectory_in_scene_html(tmp_path / "scene.html", robot, trajectory, SpatialSpadeScene(n_spheres=30),
+                                    params, np.random.default_rng(0), targets)
     commands = html_commands(path)
     objects = {c["path"] for c in commands if c["type"] == "set_object"}
     assert sum(p.startswith("/meshcat/world/sand/") for p in objects) == 30
@@ -138,9 +127,8 @@ def test_trajectory_replayed_in_a_scene(tmp_path, html_commands):
     assert len(tool) == 2 * STEPS + 1
     assert clips["/meshcat/tool"]["fps"] == pytest.approx(24.0)
     np.testing.assert_allclose(tool[-1][:3, 3], robot.tool_pose(trajectory.q[-1], trajectory.base)[0], atol=1e-5)
-    np.testing.assert_allclose(
-        tool[1][:3, 3], robot.tool_pose(trajectory.q[:2].mean(axis=0), trajectory.base)[0], atol=1e-5
-    )  # halfway between the first two steps, in joint space
+    np.testing.assert_allclose(tool[1][:3, 3], robot.tool_pose(trajectory.q[:2].mean(axis=0), trajectory.base)[0],
+                               atol=1e-5)  # halfway between the first two steps, in joint space
     # the current target advances every second frame (the trajectory's own rate)
     current = [c[:3, 3] for c in transforms_of(clips[f"/meshcat/{CURRENT_TARGET}"])]
     np.testing.assert_allclose(current[2::2], targets.positions, atol=1e-5)

@@ -19,7 +19,7 @@ STEPS = 12
 def hammer_task():
     """The shipped Panda hammer task cut to its first STEPS control steps (a short episode)."""
     task = shipped_task("hammer", "3d")
-    return dataclasses.replace(task, reference_q=task.reference_q[: STEPS + 1], horizon=STEPS)
+    return dataclasses.replace(task, reference_q=task.reference_q[:STEPS + 1], horizon=STEPS)
 
 
 class ZeroPolicy:

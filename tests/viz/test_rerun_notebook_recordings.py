@@ -37,9 +37,7 @@ def test_sampling_and_one_sample_replay(tmp_path: Path) -> None:
     for entity in ("demo/head", "demo/keypoints", "samples/sand", "samples/box"):
         assert entity in text
     snapshots = [{"grains": np.zeros((4, 3)), "count": np.array(2.0)} for _ in range(3)]
-    replayed = save_sample_replay_recording(
-        tmp_path / "one.rrd", demo, {"box": np.ones(3), "yaw": 0.3}, snapshots, 1 / 24
-    )
+    replayed = save_sample_replay_recording(tmp_path / "one.rrd", demo, {"box": np.ones(3), "yaw": 0.3}, snapshots, 1 / 24)
     text = printed_entities(replayed)
     assert "scene/params/box" in text and "replay/tool" in text and "replay/state/grains" in text
     assert "scene/params/yaw" not in text  # a uniform parameter is not a point

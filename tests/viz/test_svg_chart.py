@@ -48,9 +48,7 @@ def test_the_threshold_line_is_drawn_and_labelled():
     dashed = [line for line in root.iter(f"{SVG}line") if line.get("stroke") == "red"]
     assert len(dashed) == 1
     assert any(t.text == "success (10)" for t in root.iter(f"{SVG}text"))
-    assert not [
-        line for line in chart([BarGroup("a", [1, 2, 3])], None).iter(f"{SVG}line") if line.get("stroke") == "red"
-    ]
+    assert not [line for line in chart([BarGroup("a", [1, 2, 3])], None).iter(f"{SVG}line") if line.get("stroke") == "red"]
 
 
 @pytest.mark.parametrize(
