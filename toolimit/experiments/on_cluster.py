@@ -31,7 +31,7 @@ from toolimit.experiments.cells import CellResult, Experiment
 from toolimit.experiments.methods import Report, measure_method, missing_methods
 from toolimit.interrupts import Interrupted, interruptible
 from toolimit.learn.task import LearningTask, task_from_pipeline
-from toolimit.pipeline.run import STAGES, run_pipeline, run_stages
+from toolimit.pipeline.run import STAGES, StageReport, run_pipeline, run_stages
 from toolimit.pipeline.settings import PipelineSettings
 from toolimit.progress import tqdm
 
@@ -148,6 +148,15 @@ def _one_process(settings: PipelineSettings) -> PipelineSettings:
     )
 
 
+def _pipeline_arguments(
+    experiment: Experiment, folder: Path, settings: PipelineSettings, demo: ToolDemo, lines: list[str]
+) -> tuple[ToolDemo, Path, str, str, str, PipelineSettings, bool, StageReport]:
+    """The pipeline's arguments in a task: folder/method, no progress bars, its lines into ``lines``."""
+    method = folder / "method"
+    report: StageReport = lambda stage, line: lines.append(f"[{stage}] {line}")  # noqa: E731
+    return demo, method, experiment.tool, experiment.robot, experiment.world, settings, False, report
+
+
 def _prepare(
     folder: Path, experiment: Experiment, settings: PipelineSettings, missing: Sequence[str], demo: ToolDemo
 ) -> TaskReport:
@@ -156,17 +165,7 @@ def _prepare(
     lines: list[str] = []
     method = folder / "method"
     try:
-        run_stages(
-            demo,
-            method,
-            experiment.tool,
-            experiment.robot,
-            experiment.world,
-            settings,
-            progress=False,
-            on_stage=lambda stage, line: lines.append(f"[{stage}] {line}"),
-            stages=STAGES[:2],
-        )
+        run_stages(*_pipeline_arguments(experiment, folder, settings, demo, lines), stages=STAGES[:2])
     except StageFoundNothing as nothing:
         lines.append(f"the pipeline found nothing, no cells for this experiment: {nothing}")
         return TaskReport(lines, [], failed=True)
@@ -194,16 +193,7 @@ def _learn(
     say: Report = lambda _, line: lines.append(line)  # noqa: E731
     wall_time_s = 0.0
     if method == "final":
-        pipeline = run_pipeline(
-            demo,
-            folder / "method",
-            experiment.tool,
-            experiment.robot,
-            experiment.world,
-            settings,
-            progress=False,
-            on_stage=lambda stage, line: lines.append(f"[{stage}] {line}"),
-        )
+        pipeline = run_pipeline(*_pipeline_arguments(experiment, folder, settings, demo, lines))
         wall_time_s = pipeline.evaluation["wall_time_s"]
     cell = measure_method(experiment, method, folder, task, settings, False, say, wall_time_s)
     return TaskReport(lines, [] if cell is None else [cell], failed=cell is None)
