@@ -302,7 +302,7 @@ def align(
         config: search settings (default :class:`AlignmentConfig`).
         seed: sample i uses ``np.random.default_rng([seed, i])``.
         workers: processes evaluating samples; the result does not depend on it.
-        progress: show a tqdm bar of the candidates found against K, with the samples examined.
+        progress: show a progress bar of the candidates found against K, with the samples examined.
         scene_factory: a picklable callable making the scene instead of the registry (tests,
             researchers' own scenes); every worker calls it once.
         clean: clean the demo before the search (default True; the report is ``result.cleaning``).

@@ -33,7 +33,7 @@ from toolimit.interrupts import Interrupted, interruptible
 from toolimit.learn.task import LearningTask, task_from_pipeline
 from toolimit.pipeline.run import STAGES, StageReport, run_pipeline, run_stages
 from toolimit.pipeline.settings import PipelineSettings
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 
 #: The cells the preparation measures; the others each come from one learning run.
 PREPARED_METHODS = ("tool_only", "trajopt")
@@ -90,7 +90,7 @@ def reproduce_on_cluster(
             settings = _one_process(experiments[experiment])
             tasks.submit((experiment, "prepare"), _prepare, inputs, experiment, settings, missing, demos[experiment])
         cells = sum(len(missing) for missing in todo.values())
-        bar = tqdm(total=cells, desc=f"cells on {cluster.summary()}", unit="cell", disable=not progress)
+        bar = progress_bar(total=cells, desc=f"cells on {cluster.summary()}", unit="cell", disable=not progress)
         try:
             with bar:
                 while len(tasks):

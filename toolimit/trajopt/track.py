@@ -62,7 +62,7 @@ class TrackOptions:
             of an already converged run stops there (same basin; saves time); 0 disables it.
         initialisations: joint initialisations run from every base guess, among ``"hold"``
             (q_start held) and ``"rollout"`` (greedy differential IK); see the module docstring.
-        progress: show a tqdm bar over the starts.
+        progress: show a progress bar over the starts.
     """
 
     weights: TrackingWeights = TrackingWeights()
