@@ -49,7 +49,9 @@ STICK_BGR, SKY_BGR, GROUND_BGR, GRID_BGR, FIGURE_BGR = (
     (70, 70, 75),
 )
 #: Grid spacing and half-size around the motion, metres; the figure's height and width, metres.
-GRID_STEP, GRID_HALF_SIZE, FIGURE_HEIGHT, FIGURE_WIDTH = 0.5, 4.0, 1.7, 0.45
+GRID_STEP, GRID_HALF_SIZE, FIGURE_HEIGHT, FIGURE_WIDTH = 0.5, 4.0, 1.7, 0.4
+#: The figure hides this share of the head's image x range, at its right end.
+FIGURE_OVERLAP = 0.05
 #: OpenCV's sub-pixel drawing: coordinates in 1/16 px.
 _SHIFT = 4
 
@@ -132,25 +134,29 @@ def _background(camera: Camera, demo: ToolDemo) -> np.ndarray:
 
 
 def _figure_mask(camera: Camera, demo: ToolDemo) -> np.ndarray:
-    """(height, width) bool: a standing figure (body and head) on the ground, between the camera and
-    the motion's far end along the image's x axis, so that it hides the tool in part of the motion."""
+    """(height, width) bool: a standing figure (body and head) on the ground, 0.6 m nearer the camera
+    than the motion, its left edge at ``FIGURE_OVERLAP`` of the head's image x range from its right
+    end, so that it hides the tool at one end of the motion."""
+    from toolimit.demos.video.lift import ray_plane_intersection
+
+    pixels, _ = camera.project(demo.head)
+    u_low, u_high = np.nanmin(pixels[:, 0]), np.nanmax(pixels[:, 0])
+    normal = camera.rotation[:, 2] * [1.0, 1.0, 0.0]
+    normal /= np.linalg.norm(normal)
+    distance = float(normal @ (demo.head.mean(axis=0) - camera.centre)) - 0.6
+    half_width_px = 0.5 * FIGURE_WIDTH * camera.K[0, 0] / distance
+    u_centre = u_high - FIGURE_OVERLAP * (u_high - u_low) + half_width_px
+    ray = camera.rays(np.array([[u_centre, camera.K[1, 2]]]))
+    spot = ray_plane_intersection(camera.centre, ray, normal, distance)[0] * [1.0, 1.0, 0.0]
     right = camera.rotation[:, 0]
-    along = (demo.head - camera.centre) @ right
-    toward = camera.centre - demo.head.mean(axis=0)
-    toward[2] = 0.0
-    toward /= np.linalg.norm(toward)
-    spot = demo.head.mean(axis=0) + right * (np.quantile(along, 0.9) - along.mean()) + 0.6 * toward
-    spot[2] = 0.0
-    mask = np.zeros((camera.height, camera.width), dtype=np.uint8)
     half = 0.5 * FIGURE_WIDTH * right
-    body = np.array(
-        [spot - half, spot + half, spot + half + [0, 0, 0.8 * FIGURE_HEIGHT], spot - half + [0, 0, 0.8 * FIGURE_HEIGHT]]
-    )
-    pixels, depth = camera.project(body)
+    top = [0.0, 0.0, 0.8 * FIGURE_HEIGHT]
+    mask = np.zeros((camera.height, camera.width), dtype=np.uint8)
+    body, depth = camera.project(np.array([spot - half, spot + half, spot + half + top, spot - half + top]))
     if np.all(depth > 0):
-        cv2.fillPoly(mask, [np.round(pixels).astype(np.int32)], 1)
-        head_centre, _ = camera.project((spot + [0, 0, 0.9 * FIGURE_HEIGHT])[None])
-        head_edge, _ = camera.project((spot + [0, 0, 0.9 * FIGURE_HEIGHT] + 0.1 * right)[None])
-        radius = int(round(np.linalg.norm(head_edge - head_centre)))
-        cv2.circle(mask, tuple(int(v) for v in np.round(head_centre[0])), radius, 1, -1)
+        cv2.fillPoly(mask, [np.round(body).astype(np.int32)], 1)
+        head = spot + [0.0, 0.0, 0.9 * FIGURE_HEIGHT]
+        centre_and_edge, _ = camera.project(np.array([head, head + 0.1 * right]))
+        radius = int(round(np.linalg.norm(centre_and_edge[1] - centre_and_edge[0])))
+        cv2.circle(mask, (int(round(centre_and_edge[0, 0])), int(round(centre_and_edge[0, 1]))), radius, 1, -1)
     return mask.astype(bool)
