@@ -3,7 +3,7 @@
 Each of ``../shared/data/video_demos``' trajectories is projected through a side camera 3.5 m from
 the motion, 1.2 m high, 1280 x 720 px, f = 1000 px (``side_camera``), with 3 px Gaussian noise
 on every pixel coordinate and 5 % of the frames dropped (``perturbed``), then lifted
-(``lift_tracks``) with the right hint (the side the true handle end is on in most frames). Printed
+(``lift_tracks``) with the right hint (``handle_side``: the side the true handle end is on in most frames). Printed
 per trajectory, over ``SEEDS`` noise draws: the mean head error (cm) and the mean angle between
 the lifted and the true tool axis (degrees). The hammer's file gives no handle direction (its
 handle is the loader's guess: no axis figure) and its heights are not ground-referenced: its
@@ -33,8 +33,8 @@ import numpy as np
 
 from toolimit.demos import ToolDemo, load_video_trajectory, synthesize_motion
 from toolimit.demos.video import (
-    Camera,
     LiftSettings,
+    handle_side,
     lift_tracks,
     perturbed,
     project_demo,
@@ -48,14 +48,6 @@ SEEDS = range(5)
 NOISE_PX, DROP = 3.0, 0.05
 
 
-def far_share(demo: ToolDemo, camera: Camera) -> float:
-    """Share of frames whose true handle end is farther from the camera than the head's foot on its ray."""
-    rays = camera.rays(camera.project(demo.handle)[0])
-    handle_depth = np.sum(rays * (demo.handle - camera.centre), axis=1)
-    foot = np.sum(rays * (demo.head - camera.centre), axis=1)
-    return float(np.mean(handle_depth > foot))
-
-
 def axis_degrees(lifted: ToolDemo, truth: ToolDemo) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(np.sum(lifted.axis * truth.axis, axis=1), -1.0, 1.0)))
 
@@ -63,7 +55,7 @@ def axis_degrees(lifted: ToolDemo, truth: ToolDemo) -> np.ndarray:
 def measure(name: str, truth: ToolDemo, plane_point: tuple[float, float, float] | None, noise: float) -> dict:
     camera = side_camera(truth.head)
     exact = project_demo(truth, camera)
-    hint = "far" if far_share(truth, camera) > 0.5 else "near"
+    hint = handle_side(truth, camera)
     settings = LiftSettings(handle_hint=hint, plane_point=plane_point)
     head, axis, median_axis = [], [], []
     for seed in SEEDS:

@@ -14,6 +14,7 @@ from toolimit.demos.video import (
     EndpointTracks,
     LiftSettings,
     lift_tracks,
+    handle_side,
     look_at,
     perturbed,
     project_demo,
@@ -76,6 +77,11 @@ def test_a_planar_motion_is_lifted_exactly():
     np.testing.assert_allclose(lifted.demo.handle, demo.handle, atol=1e-9)
     assert not lifted.handle_far.any()
     assert not lifted.head_filled.any() and np.all(lifted.head_sigma > 0)
+
+
+def test_handle_side_reads_the_hint_off_a_known_motion():
+    assert handle_side(planar_demo(0.5), CAMERA) == "near"
+    assert handle_side(planar_demo(-0.5), CAMERA) == "far"
 
 
 @pytest.mark.parametrize("hint", ["near", "far"])

@@ -7,7 +7,7 @@ the only modules of the package that import it.
 """
 
 from toolimit.demos.video.camera import Camera, look_at, read_camera, side_camera, write_camera
-from toolimit.demos.video.lift import LiftedDemo, LiftSettings, lift_tracks, ray_plane_intersection
+from toolimit.demos.video.lift import LiftedDemo, LiftSettings, handle_side, lift_tracks, ray_plane_intersection
 from toolimit.demos.video.tracks import (
     TRACKS_HEADER,
     EndpointTracks,
@@ -23,6 +23,7 @@ __all__ = [
     "EndpointTracks",
     "LiftSettings",
     "LiftedDemo",
+    "handle_side",
     "lift_tracks",
     "look_at",
     "perturbed",

@@ -141,6 +141,15 @@ def handle_candidates(
     return near, far, offset
 
 
+def handle_side(demo: ToolDemo, camera: Camera) -> str:
+    """The hint that is right for most frames of a known ``demo`` seen by ``camera``: "far" when its
+    handle end lies beyond the foot of the head on the handle's ray in most frames, else "near"
+    (for benchmarks and notebooks that lift a motion whose truth they have)."""
+    rays = camera.rays(camera.project(demo.handle)[0])
+    beyond = np.sum(rays * (demo.handle - camera.centre), axis=1) > np.sum(rays * (demo.head - camera.centre), axis=1)
+    return "far" if np.mean(beyond) > 0.5 else "near"
+
+
 def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, settings: LiftSettings) -> LiftedDemo:
     """The 3D demonstration of ``tracks`` seen by ``camera`` (see the module docstring).
 
