@@ -16,11 +16,17 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    acceleration); where both paths are equally smooth (the mirror image of a motion seen from the
    side is as smooth as the motion), ``handle_hint`` decides, and without a hint the lift refuses
    rather than return a mirrored demonstration.
+4. **The handle's depth** along its ray is smoothed over time: its signed offset from the foot
+   (+ far, - near) is filtered like the pixels. Where the ray grazes the sphere of the tool's length
+   (a tool seen nearly side-on), the offset is the square root of a small noisy number: pixel noise
+   there becomes a one-sided depth error, and the near/far choice flips between frames; filtering
+   the signed offset averages the flips out, which filtering the pixels alone cannot do.
 
 Frames where an end is not visible are filled by linear interpolation of the lifted points. The
-per-frame uncertainty is the position change caused by ``pixel_noise`` pixels of track error and by
-the plane distance's spread: it does not include the motion's departure from the plane, which is
-the main error on real motions (README, "Stage (i) from a video").
+per-frame uncertainty is the position change caused by the track error left after smoothing
+(``pixel_noise`` pixels before it) and by the plane distance's uncertainty: it does not include the
+motion's departure from the plane, which is the main error on real motions (README, "Stage (i) from
+a video").
 """
 
 from __future__ import annotations
@@ -58,8 +64,9 @@ class LiftSettings:
             ray-ground meetings).
         pixel_noise: standard deviation of the tracks' pixel error, for the per-frame uncertainty.
         smoothing: standard deviation, in frames, of the Gaussian filter run along each end's pixel
-            track before the lift (0: none); it averages out track noise a tool's motion at video
-            rates does not have.
+            track before the lift and along the handle end's signed depth offset after the near/far
+            choice (0: none); it averages out track noise a tool's motion at video rates does not
+            have.
         min_visible_share: each end must be visible in at least this share of the frames.
         mirror_ratio: the mirrored handle path counts as an equal explanation when its squared
             acceleration is less than this many times the best path's.
@@ -131,18 +138,31 @@ def ray_plane_intersection(origin: np.ndarray, rays: np.ndarray, normal: np.ndar
     return origin + rays * scale[:, None]
 
 
+def squared_offset(
+    origin: np.ndarray, rays: np.ndarray, head: np.ndarray, length: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The foot of ``head`` (N, 3) on the unit rays ``origin + s * rays`` (its ``s``, metres) and the
+    squared distance (N,) m^2 from that foot to the ray's points at ``length`` metres from the head:
+    ``length^2`` minus the ray's squared distance from the head, negative where the ray misses."""
+    relative = head - origin
+    foot = np.sum(rays * relative, axis=1)
+    return foot, foot**2 - np.sum(relative**2, axis=1) + length**2
+
+
 def handle_candidates(
     origin: np.ndarray, rays: np.ndarray, head: np.ndarray, length: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The near and far points (N, 3 each) on the rays ``origin + s * rays`` at ``length`` metres
     from ``head`` (N, 3), and their half-separation (N,) metres. A ray that passes farther than
     ``length`` from the head gives its closest point for both."""
-    relative = head - origin
-    foot = np.sum(rays * relative, axis=1)
-    offset = np.sqrt(np.maximum(foot**2 - np.sum(relative**2, axis=1) + length**2, 0.0))
-    near = origin + rays * np.maximum(foot - offset, 0.0)[:, None]
-    far = origin + rays * (foot + offset)[:, None]
-    return near, far, offset
+    foot, squared = squared_offset(origin, rays, head, length)
+    offset = np.sqrt(np.maximum(squared, 0.0))
+    return _on_ray(origin, rays, foot - offset), _on_ray(origin, rays, foot + offset), offset
+
+
+def _on_ray(origin: np.ndarray, rays: np.ndarray, along: np.ndarray) -> np.ndarray:
+    """(N, 3) the points ``along`` (N,) metres on the rays, none behind the camera."""
+    return origin + rays * np.maximum(along, 0.0)[:, None]
 
 
 def handle_side(demo: ToolDemo, camera: Camera) -> str:
@@ -179,20 +199,24 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     behind = head_frames[head_rays @ normal <= 1e-6]
     if behind.size:
         raise TrackError(f"tracks: the head's ray points away from the working plane at frames {behind[:10].tolist()}")
-    distance, distance_sigma = _plane_distance(origin, head_rays, normal, settings)
+    distance, distance_sigma = _plane_distance(camera, tracks.head[head_frames], normal, settings)
     head = _filled(ray_plane_intersection(origin, head_rays, normal, distance), head_frames, tracks.n_frames)
 
     handle_frames = np.flatnonzero(tracks.handle_visible)
     handle_rays = camera.rays(tracks.handle[handle_frames])
     near, far, offset = handle_candidates(origin, handle_rays, head[handle_frames], length)
     far_chosen, hint_used = _handle_sides(near, far, offset, settings)
-    seen_handle = np.where(far_chosen[:, None], far, near)
-    handle = _filled(seen_handle, handle_frames, tracks.n_frames)
+    signed = np.where(far_chosen, offset, -offset)
+    if settings.smoothing > 0:
+        signed = _filtered(signed[:, None], handle_frames, tracks.n_frames, settings.smoothing)[handle_frames, 0]
+    far_chosen = signed > 0
+    foot, _ = squared_offset(origin, handle_rays, head[handle_frames], length)
+    handle = _filled(_on_ray(origin, handle_rays, foot + signed), handle_frames, tracks.n_frames)
     axis = handle - head
     handle = head + length * axis / np.linalg.norm(axis, axis=1, keepdims=True)
 
     head_sigma, handle_sigma = _uncertainty(
-        camera, tracks, head_frames, handle_frames, head, normal, distance, distance_sigma, length, far_chosen, settings
+        camera, tracks, head_frames, handle_frames, head, handle, normal, distance, distance_sigma, length, settings
     )
     demo = ToolDemo(head, handle, fps, tool, source=f"lifted from 2D tracks ({tracks.n_frames} frames)")
     return LiftedDemo(
@@ -213,14 +237,19 @@ def smoothed(tracks: EndpointTracks, frames: float) -> EndpointTracks:
     deviation (gaps bridged linearly for the filter; visibility unchanged)."""
     if frames == 0:
         return tracks
-    from scipy.ndimage import gaussian_filter1d
-
     ends = {}
     for name in ("head", "handle"):
         seen = np.flatnonzero(getattr(tracks, f"{name}_visible"))
-        bridged = _filled(getattr(tracks, name)[seen], seen, tracks.n_frames)
-        ends[name] = gaussian_filter1d(bridged, frames, axis=0, mode="nearest")
+        ends[name] = _filtered(getattr(tracks, name)[seen], seen, tracks.n_frames, frames)
     return replace(tracks, **ends)
+
+
+def _filtered(values: np.ndarray, frames: np.ndarray, n_frames: int, width: float) -> np.ndarray:
+    """(n_frames, k) ``values`` (len(frames), k) known at ``frames``, gaps bridged linearly, then
+    filtered along time by a Gaussian of ``width`` frames standard deviation."""
+    from scipy.ndimage import gaussian_filter1d
+
+    return gaussian_filter1d(_filled(values, frames, n_frames), width, axis=0, mode="nearest")
 
 
 def _check_visible(tracks: EndpointTracks, min_share: float) -> None:
@@ -236,10 +265,14 @@ def _check_visible(tracks: EndpointTracks, min_share: float) -> None:
 
 
 def _plane_distance(
-    origin: np.ndarray, rays: np.ndarray, normal: np.ndarray, settings: LiftSettings
+    camera: Camera, pixels: np.ndarray, normal: np.ndarray, settings: LiftSettings
 ) -> tuple[float, float]:
-    """The working plane's distance from the camera along ``normal`` (metres) and its spread: from
-    ``settings.plane_point``, or from the head rays' nearest meetings with the ground."""
+    """The working plane's distance from the camera along ``normal`` (metres) and its standard
+    uncertainty: from ``settings.plane_point`` (exact), or from the nearest meetings with the ground
+    of the head's rays through ``pixels`` (N, 2), uncertain by their spread and by the move of a
+    meeting under the track noise, in quadrature (the nearest of noisy meetings are drawn near by
+    about that much)."""
+    origin, rays = camera.centre, camera.rays(pixels)
     if settings.plane_point is not None:
         distance = float(normal @ (np.asarray(settings.plane_point) - origin))
         if distance <= 0:
@@ -252,9 +285,22 @@ def _plane_distance(
             f"camera sees no ground: only {len(downward)} of the head's {len(rays)} rays point below the horizon "
             f"(camera height {origin[2]:.2f} m; need {contacts} ground contacts to place the working plane)"
         )
-    ground = -origin[2] * (downward @ normal) / downward[:, 2]
-    nearest = np.sort(ground)[:contacts]
-    return float(nearest.mean()), float(nearest.std())
+    downward_pixels = pixels[rays[:, 2] < -1e-6]
+    ground = _ground_meeting(origin, downward, normal)
+    chosen = np.argsort(ground)[:contacts]
+    nearest = ground[chosen]
+    moved = [
+        _ground_meeting(origin, camera.rays(downward_pixels[chosen] + step), normal) - nearest
+        for step in _pixel_steps(settings)
+    ]
+    pixel_spread = float(np.sqrt(np.mean(sum(np.square(move) for move in moved))))
+    return float(nearest.mean()), math.hypot(float(nearest.std()), pixel_spread)
+
+
+def _ground_meeting(origin: np.ndarray, rays: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """(N,) horizontal distance along ``normal`` (metres) from the camera at ``origin`` to where the
+    downward ``rays`` (N, 3) meet the ground z = 0."""
+    return -origin[2] * (rays @ normal) / rays[:, 2]
 
 
 def _filled(points: np.ndarray, frames: np.ndarray, n_frames: int) -> np.ndarray:
@@ -337,33 +383,65 @@ def _uncertainty(
     head_frames: np.ndarray,
     handle_frames: np.ndarray,
     head: np.ndarray,
+    handle: np.ndarray,
     normal: np.ndarray,
     distance: float,
     distance_sigma: float,
     length: float,
-    far_chosen: np.ndarray,
     settings: LiftSettings,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(T,) standard uncertainty of head and handle end, metres: the changes caused by moving each
-    pixel coordinate by ``pixel_noise`` and the plane by its distance's spread, added in quadrature
-    (finite differences of the lift itself); interpolated over the frames an end is not seen."""
-    origin, noise = camera.centre, settings.pixel_noise
+    pixel coordinate of either end by the track noise (:func:`_pixel_steps`) and the plane by its
+    distance's uncertainty, added in quadrature (finite
+    differences of the lift itself); interpolated over the frames an end is not seen.
+
+    The handle end's: its ray's sideways move at its range, the move of the head's foot on the ray,
+    and the spread of its depth offset ``sqrt(q)`` from the foot (``q``: :func:`squared_offset`,
+    moved by both ends' pixels and the plane): the half-width of the image of ``q``'s +-1-sigma
+    interval, which is the linear ``sigma_q / (2 sqrt(q))`` away from the tangent and stays finite
+    (``sqrt(sigma_q) / 2``) where the ray grazes the tool-length sphere, where a finite difference
+    clamped at the tangent reports almost nothing."""
+    origin, n_frames = camera.centre, tracks.n_frames
+    steps = _pixel_steps(settings)
     head_pixels = tracks.head[head_frames]
-    base = ray_plane_intersection(origin, camera.rays(head_pixels), normal, distance)
-    squared = (ray_plane_intersection(origin, camera.rays(head_pixels), normal, distance + distance_sigma) - base) ** 2
-    for step in ([noise, 0.0], [0.0, noise]):
-        moved = ray_plane_intersection(origin, camera.rays(head_pixels + step), normal, distance)
-        squared = squared + (moved - base) ** 2
-    head_sigma = _filled(np.sqrt(np.sum(squared, axis=1))[:, None], head_frames, tracks.n_frames)[:, 0]
+
+    def head_at(pixels: np.ndarray, plane: float) -> np.ndarray:
+        return _filled(ray_plane_intersection(origin, camera.rays(pixels), normal, plane), head_frames, n_frames)
+
+    head_moves = [head_at(head_pixels, distance + distance_sigma)] + [
+        head_at(head_pixels + step, distance) for step in steps
+    ]
+    head_sigma = np.sqrt(sum(np.sum((moved - head) ** 2, axis=1) for moved in head_moves))
 
     handle_pixels = tracks.handle[handle_frames]
     heads = head[handle_frames]
-    pick = far_chosen[:, None]
-    near, far, _ = handle_candidates(origin, camera.rays(handle_pixels), heads, length)
-    chosen = np.where(pick, far, near)
-    squared = np.zeros(len(handle_frames)) + head_sigma[handle_frames] ** 2
-    for step in ([noise, 0.0], [0.0, noise]):
-        near, far, _ = handle_candidates(origin, camera.rays(handle_pixels + step), heads, length)
-        squared = squared + np.sum((np.where(pick, far, near) - chosen) ** 2, axis=1)
-    handle_sigma = _filled(np.sqrt(squared)[:, None], handle_frames, tracks.n_frames)[:, 0]
-    return head_sigma, handle_sigma
+    rays = camera.rays(handle_pixels)
+    foot, squared_depth = squared_offset(origin, rays, heads, length)
+    ranges = np.sum(rays * (handle[handle_frames] - origin), axis=1)
+    moves = [(rays, moved[handle_frames]) for moved in head_moves]
+    moves += [(camera.rays(handle_pixels + step), heads) for step in steps]
+    sideways = foot_spread = depth_spread = np.zeros(len(handle_frames))
+    for moved_rays, moved_heads in moves:
+        moved_foot, moved_depth = squared_offset(origin, moved_rays, moved_heads, length)
+        sideways = sideways + np.sum(((moved_rays - rays) * ranges[:, None]) ** 2, axis=1)
+        foot_spread = foot_spread + (moved_foot - foot) ** 2
+        depth_spread = depth_spread + (moved_depth - squared_depth) ** 2
+    depth_spread = np.sqrt(depth_spread)
+    positive = np.maximum(squared_depth, 0.0)
+    offset_spread = (np.sqrt(positive + depth_spread) - np.sqrt(np.maximum(positive - depth_spread, 0.0))) / 2
+    seen = np.sqrt(sideways + foot_spread + offset_spread**2)
+    return head_sigma, _filled(seen[:, None], handle_frames, n_frames)[:, 0]
+
+
+def _pixel_steps(settings: LiftSettings) -> tuple[np.ndarray, np.ndarray]:
+    """The moves (px) of a pixel's u and v by one standard deviation of the track noise left after
+    the lift's smoothing: ``pixel_noise`` times the root of the sum of the squared weights of the
+    Gaussian filter (white noise's share that passes it; 1 without smoothing)."""
+    kept = 1.0
+    if settings.smoothing > 0:
+        impulse = np.zeros((8 * math.ceil(settings.smoothing) + 1, 1))
+        impulse[len(impulse) // 2] = 1.0
+        weights = _filtered(impulse, np.arange(len(impulse)), len(impulse), settings.smoothing)
+        kept = float(np.sqrt(np.sum(weights**2)))
+    noise = settings.pixel_noise * kept
+    return np.array([noise, 0.0]), np.array([0.0, noise])
