@@ -321,5 +321,12 @@ def test_spade_video_1_seen_from_the_side_is_lifted_within_10_cm(video_demos_dir
     axis_error = np.degrees(np.arccos(np.clip(np.sum(lifted.axis * truth.axis, axis=1), -1, 1)))
     assert head_error < 0.10, f"mean head error {head_error:.3f} m"
     assert np.median(axis_error) < 3.0, f"median axis error {np.median(axis_error):.2f} deg"
-    with pytest.raises(TrackError, match="mirror ambiguity"):
-        lift_tracks(tracks, camera, "spade", truth.fps, LiftSettings())
+    # Without a hint: a refusal (mirror ambiguity) or the true side, never a silently mirrored demo
+    # (on this noise draw the smoothest path is now clear enough not to be ambiguous; the refusal
+    # itself is tested exactly on held_still).
+    try:
+        unhinted = lift_tracks(tracks, camera, "spade", truth.fps, LiftSettings())
+    except TrackError as error:
+        assert "mirror ambiguity" in str(error)
+    else:
+        assert np.mean(unhinted.handle_far) < 0.5, "the handle end is on the near side of the head"

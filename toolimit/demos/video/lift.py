@@ -246,10 +246,18 @@ def smoothed(tracks: EndpointTracks, frames: float) -> EndpointTracks:
 
 def _filtered(values: np.ndarray, frames: np.ndarray, n_frames: int, width: float) -> np.ndarray:
     """(n_frames, k) ``values`` (len(frames), k) known at ``frames``, gaps bridged linearly, then
-    filtered along time by a Gaussian of ``width`` frames standard deviation."""
+    filtered along time by a Gaussian of ``width`` frames standard deviation. Each end is padded by
+    its point reflection (``2 x[0] - x[k]``), so that a motion still moving at the first or last frame
+    is not pulled towards the inside (as repeating the end frame would), at the price of more noise
+    there."""
     from scipy.ndimage import gaussian_filter1d
 
-    return gaussian_filter1d(_filled(values, frames, n_frames), width, axis=0, mode="nearest")
+    series = _filled(values, frames, n_frames)
+    pad = min(4 * math.ceil(width), n_frames - 1)
+    before = 2 * series[:1] - series[pad:0:-1]
+    after = 2 * series[-1:] - series[-2 : -pad - 2 : -1]
+    padded = np.concatenate([before, series, after])
+    return gaussian_filter1d(padded, width, axis=0, mode="nearest")[pad : pad + n_frames]
 
 
 def _check_visible(tracks: EndpointTracks, min_share: float) -> None:
@@ -439,7 +447,7 @@ def _pixel_steps(settings: LiftSettings) -> tuple[np.ndarray, np.ndarray]:
     Gaussian filter (white noise's share that passes it; 1 without smoothing)."""
     kept = 1.0
     if settings.smoothing > 0:
-        impulse = np.zeros((8 * math.ceil(settings.smoothing) + 1, 1))
+        impulse = np.zeros((16 * math.ceil(settings.smoothing) + 1, 1))
         impulse[len(impulse) // 2] = 1.0
         weights = _filtered(impulse, np.arange(len(impulse)), len(impulse), settings.smoothing)
         kept = float(np.sqrt(np.sum(weights**2)))
