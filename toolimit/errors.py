@@ -24,6 +24,11 @@ class DemoError(InputError):
     """A demonstration is malformed: the message names the field, the shape or the value."""
 
 
+class TrackError(DemoError):
+    """Endpoint tracks or a camera that cannot become a demonstration: a malformed track or camera
+    file, too few visible frames, a camera that sees no ground, a mirror ambiguity without a hint."""
+
+
 class InvalidSetting(InputError):
     """A setting no run can use; ``field`` names the settings field, ``problem`` says what is wrong
     (the command line names the field's flag instead)."""

@@ -1,10 +1,17 @@
-"""``toolimit demo``: make a synthetic demonstration (``synth``) or summarise one (``show``)."""
+"""``toolimit demo``: make a synthetic demonstration (``synth``), summarise one (``show``), or go
+from a video to one: ``render`` a demonstration to an MP4, ``track`` its markers to a tracks CSV,
+``lift`` tracks to a demonstration (:mod:`toolimit.demos.video`)."""
 
 from __future__ import annotations
 
 import argparse
+import importlib
+from dataclasses import replace
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from toolimit.cli import (
     CliError,
@@ -13,11 +20,15 @@ from toolimit.cli import (
     add_tool_argument,
     check_choice,
     check_count,
+    check_output_file,
     check_writable_folder,
 )
+from toolimit.cli.flags import Flag, add_flags, apply_flags
+from toolimit.demos.video.lift import HANDLE_HINTS, LiftSettings
 
 if TYPE_CHECKING:
     from toolimit.demos import ToolDemo
+    from toolimit.demos.video import EndpointTracks
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -35,6 +46,59 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     show.add_argument("path", type=Path, help="demonstration file")
     show.add_argument("--tool", default=None, help="tool name, for files that do not store it")
     show.set_defaults(func=run_show)
+
+    render = actions.add_parser(
+        "render", help="render a demonstration to an MP4 (tool stick, end markers, ground grid, a figure)"
+    )
+    render.add_argument("demo", type=Path, help="demonstration file")
+    render.add_argument("--tool", default=None, help="tool name, for files that do not store it")
+    render.add_argument(
+        "--camera",
+        type=Path,
+        default=None,
+        help="camera JSON to film with (default: a side camera 3.5 m from the motion, 1.2 m high, 1280 x 720, "
+        "f = 1000 px, written to OUT's name with .camera.json)",
+    )
+    add_out_argument(render, "output .mp4 file; the true tracks go beside it (.truth.csv)")
+    render.set_defaults(func=run_render)
+
+    track = actions.add_parser("track", help="track a rendered video's two end markers to a tracks CSV")
+    track.add_argument("video", type=Path, help="video file (.mp4) made by `toolimit demo render`")
+    add_out_argument(track, "output tracks .csv file")
+    track.set_defaults(func=run_track)
+
+    lift = actions.add_parser("lift", help="lift a tracks CSV seen by a calibrated camera to a demonstration (.npz)")
+    lift.add_argument(
+        "tracks", type=Path, help="tracks CSV: frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible"
+    )
+    lift.add_argument("--camera", type=Path, required=True, help="camera JSON: width, height, K, world_from_camera")
+    add_tool_argument(lift)
+    lift.add_argument("--fps", type=float, required=True, help="the video's frames per second")
+    add_flags(lift, LIFT_FLAGS, {"": LiftSettings()})
+    add_out_argument(lift, "output .npz demonstration")
+    lift.set_defaults(func=run_lift)
+
+
+def _point(text: str) -> tuple[float, float, float]:
+    """``x,y,z`` metres -> a point (argparse type)."""
+    try:
+        values = tuple(float(value) for value in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected x,y,z in metres, got {text!r}") from None
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f"expected three coordinates x,y,z, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+#: ``toolimit demo lift``'s flags: the fields of :class:`LiftSettings` a user sets.
+LIFT_FLAGS = (
+    Flag("handle_hint", choices=HANDLE_HINTS),
+    Flag("tool_length"),
+    Flag("plane_point", parse=_point, show=lambda point: "from the ground contacts" if point is None else str(point)),
+    Flag("contact_share"),
+    Flag("pixel_noise"),
+    Flag("smoothing"),
+)
 
 
 def run_synth(args: argparse.Namespace) -> int:
@@ -75,6 +139,100 @@ def run_show(args: argparse.Namespace) -> int:
         f"keypoints (frames) {velocity_keypoints(cleaned).tolist()}"
     )
     return 0
+
+
+def run_render(args: argparse.Namespace) -> int:
+    from toolimit.demos import load_demo
+    from toolimit.demos.video import read_camera, side_camera, write_camera, write_tracks
+
+    check_output_file(args.out, "--out", ".mp4")
+    demo = load_demo(args.demo, tool=args.tool)
+    camera = read_camera(args.camera) if args.camera is not None else side_camera(demo.head)
+    render_video = _video_module("render").render_video
+    truth = render_video(demo, camera, args.out)
+    truth_path = args.out.with_suffix(".truth.csv")
+    write_tracks(truth, truth_path)
+    written = [str(args.out), str(truth_path)]
+    if args.camera is None:
+        camera_path = args.out.with_suffix(".camera.json")
+        write_camera(camera, camera_path)
+        written.append(str(camera_path))
+    print(
+        f"wrote {', '.join(written)}: {demo.n_frames} frames at {demo.fps:g} fps, {camera.width} x {camera.height} px; "
+        f"{_seen(truth)} (not hidden by the figure)"
+    )
+    return 0
+
+
+def run_track(args: argparse.Namespace) -> int:
+    from toolimit.demos.video import write_tracks
+
+    check_output_file(args.out, "--out", ".csv")
+    if not args.video.is_file():
+        raise CliError(f"video file not found: {args.video}")
+    tracks = _video_module("marker_tracking").track_markers(args.video)
+    write_tracks(tracks, args.out)
+    print(f"wrote {args.out}: {tracks.n_frames} frames; {_seen(tracks)}")
+    return 0
+
+
+def run_lift(args: argparse.Namespace) -> int:
+    from toolimit.demos import save_demo
+    from toolimit.demos.video import lift_tracks, read_camera, read_tracks
+
+    check_choice("--tool", args.tool, _tools(), "tool")
+    if not args.fps > 0:
+        raise CliError(f"--fps: must be positive, got {args.fps}")
+    check_output_file(args.out, "--out", ".npz")
+    settings = apply_flags(LiftSettings(), LIFT_FLAGS, args)
+    for option, path in (("tracks", args.tracks), ("--camera", args.camera)):
+        if not path.is_file():
+            raise CliError(f"{option}: file not found: {path}")
+    tracks = read_tracks(args.tracks)
+    camera = read_camera(args.camera)
+    lifted = lift_tracks(tracks, camera, args.tool, args.fps, settings)
+    demo = replace(lifted.demo, source=f"lifted from {args.tracks} seen by {args.camera}")
+    save_demo(
+        demo,
+        args.out,
+        head_sigma=lifted.head_sigma,
+        handle_sigma=lifted.handle_sigma,
+        head_filled=lifted.head_filled,
+        handle_filled=lifted.handle_filled,
+        handle_far=lifted.handle_far,
+    )
+    side = (
+        f"handle sides from --handle-hint {settings.handle_hint}"
+        if lifted.hint_used
+        else "handle sides from smoothness"
+    )
+    print(
+        f"wrote {args.out}: {summary(demo)}; working plane {lifted.plane_distance:.2f} m from the camera, {side}; "
+        f"uncertainty (1 sigma) head {np.median(lifted.head_sigma) * 100:.1f} cm, handle end "
+        f"{np.median(lifted.handle_sigma) * 100:.1f} cm (median over frames); "
+        f"filled in: head {int(lifted.head_filled.sum())}, handle end {int(lifted.handle_filled.sum())} frames"
+    )
+    return 0
+
+
+def _tools() -> list[str]:
+    from toolimit.tools import TOOLS
+
+    return list(TOOLS)
+
+
+def _seen(tracks: EndpointTracks) -> str:
+    return f"head seen in {int(tracks.head_visible.sum())}, handle end in {int(tracks.handle_visible.sum())} frames"
+
+
+def _video_module(name: str) -> ModuleType:
+    """``toolimit.demos.video.<name>``, which needs OpenCV: a one-line error naming the extra when it is missing."""
+    try:
+        return importlib.import_module(f"toolimit.demos.video.{name}")
+    except ModuleNotFoundError as error:
+        if error.name != "cv2":
+            raise
+        raise CliError('OpenCV is not installed: install the video extra (pip install -e ".[video]")') from None
 
 
 def _motion(demo: ToolDemo) -> str:

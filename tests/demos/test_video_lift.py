@@ -1,0 +1,332 @@
+"""The lift from 2D tracks to a demonstration: exact synthetic cases, every refusal, the file formats,
+and the real trajectories seen by the benchmark's side camera (skipped without ../shared)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from toolimit.demos import ToolDemo, load_video_trajectory
+from toolimit.demos.video import (
+    TRACKS_HEADER,
+    EndpointTracks,
+    LiftSettings,
+    handle_side,
+    lift_tracks,
+    look_at,
+    perturbed,
+    project_demo,
+    ray_plane_intersection,
+    read_camera,
+    read_tracks,
+    side_camera,
+    write_camera,
+    write_tracks,
+)
+from toolimit.errors import InvalidSetting, TrackError
+
+EXACT = LiftSettings(smoothing=0.0)
+#: A camera 1.2 m high at the origin, looking along +x at the working plane x = 3.
+CAMERA = look_at([0.0, 0.0, 1.2], [3.0, 0.0, 0.4])
+
+
+def planar_demo(tilt_towards_camera: float, frames: int = 40) -> ToolDemo:
+    """A head moving in the plane x = 3, resting on the ground (z = 0) in its second half, with a 0.4 m
+    tool leaning ``tilt_towards_camera`` radians out of the plane towards the camera (-x)."""
+    t = np.linspace(0.0, 1.0, frames)
+    head = np.column_stack([np.full(frames, 3.0), -0.6 + 1.2 * t, 0.3 * np.clip(np.sin(2 * np.pi * t), 0.0, None)])
+    up = np.column_stack([np.zeros(frames), 0.3 * np.ones(frames), np.ones(frames)])
+    up /= np.linalg.norm(up, axis=1, keepdims=True)
+    axis = np.cos(tilt_towards_camera) * up + np.sin(tilt_towards_camera) * np.array([-1.0, 0.0, 0.0])
+    return ToolDemo(head, head + 0.4 * axis, 24.0, "spade")
+
+
+def held_still(frames: int = 20) -> ToolDemo:
+    """A 0.4 m tool held still with its head on the ground at (3, 0, 0), leaning 0.5 rad towards the
+    camera: its mirror image is just as still, so only a hint can tell them apart."""
+    axis = np.array([-np.sin(0.5), 0.0, np.cos(0.5)])
+    head = np.tile([3.0, 0.0, 0.0], (frames, 1))
+    return ToolDemo(head, head + 0.4 * axis, 24.0, "spade")
+
+
+def test_ray_plane_intersection_by_hand():
+    rays = np.array([[1.0, 0.0, 0.0], [0.6, 0.8, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+    points = ray_plane_intersection(np.array([1.0, 2.0, 3.0]), rays, np.array([1.0, 0.0, 0.0]), 2.0)
+    np.testing.assert_allclose(points[:2], [[3.0, 2.0, 3.0], [3.0, 2.0 + 8 / 3, 3.0]])
+    assert np.all(np.isnan(points[2:])), "a ray parallel to the plane or pointing away meets it nowhere"
+
+
+def test_projection_and_rays_invert_each_other():
+    points = np.array([[3.0, 0.2, 0.1], [2.5, -0.7, 1.5]])
+    pixels, depth = CAMERA.project(points)
+    rays = CAMERA.rays(pixels)
+    along = (points - CAMERA.centre) / np.linalg.norm(points - CAMERA.centre, axis=1, keepdims=True)
+    np.testing.assert_allclose(rays, along, atol=1e-12)
+    assert np.all(depth > 0)
+
+
+def test_a_planar_motion_is_lifted_exactly():
+    demo = planar_demo(0.5)
+    lifted = lift_tracks(
+        project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", smoothing=0.0)
+    )
+    np.testing.assert_allclose(lifted.plane_distance, 3.0, atol=1e-9)
+    np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
+    np.testing.assert_allclose(lifted.demo.handle, demo.handle, atol=1e-9)
+    assert not lifted.handle_far.any()
+    assert not lifted.head_filled.any() and np.all(lifted.head_sigma > 0)
+
+
+def test_handle_side_reads_the_hint_off_a_known_motion():
+    assert handle_side(planar_demo(0.5), CAMERA) == "near"
+    assert handle_side(planar_demo(-0.5), CAMERA) == "far"
+
+
+@pytest.mark.parametrize("hint", ["near", "far"])
+def test_the_hint_decides_a_mirror_ambiguity(hint):
+    demo = held_still()
+    lifted = lift_tracks(
+        project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint=hint, smoothing=0.0)
+    )
+    assert lifted.hint_used
+    np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
+    if hint == "near":
+        np.testing.assert_allclose(lifted.demo.handle, demo.handle, atol=1e-9)
+        return
+    assert lifted.handle_far.all()
+    assert np.all(lifted.demo.handle[:, 0] > 3.0), "the far solution leans away from the camera"
+    np.testing.assert_allclose(lifted.demo.lengths, 0.4, atol=1e-9)
+
+
+def test_a_known_plane_point_replaces_the_ground():
+    demo = planar_demo(0.5).translated([0.0, 0.0, 0.5])  # the head never touches the ground
+    settings = LiftSettings(handle_hint="near", smoothing=0.0, plane_point=(3.0, 5.0, -1.0))
+    lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, settings)
+    np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
+    from_ground = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint="near"))
+    assert from_ground.plane_distance > 3.1, "without the point, the lowest head is taken for a ground contact"
+
+
+def test_smoothness_alone_decides_when_the_mirror_image_is_rougher():
+    demo = planar_demo(0.5)
+    lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, EXACT)
+    assert not lifted.hint_used
+    np.testing.assert_allclose(lifted.demo.handle, demo.handle, atol=1e-9)
+    near, far = _candidates(demo)
+    mirrored = np.where(lifted.handle_far[:, None], near, far)
+    assert np.sum(np.diff(mirrored, n=2, axis=0) ** 2) > 1.5 * np.sum(np.diff(demo.handle, n=2, axis=0) ** 2)
+
+
+def _candidates(demo: ToolDemo) -> tuple[np.ndarray, np.ndarray]:
+    """The near and far handle solutions of ``demo`` seen by CAMERA."""
+    from toolimit.demos.video.lift import handle_candidates
+
+    near, far, _ = handle_candidates(CAMERA.centre, CAMERA.rays(CAMERA.project(demo.handle)[0]), demo.head, 0.4)
+    return near, far
+
+
+def test_dropped_frames_are_filled_and_flagged():
+    demo = planar_demo(0.5)
+    tracks = project_demo(demo, CAMERA)
+    hidden = np.zeros(demo.n_frames, dtype=bool)
+    hidden[[5, 6, 20]] = True
+    tracks = EndpointTracks(tracks.head, tracks.handle, ~hidden, tracks.handle_visible & ~hidden)
+    lifted = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", smoothing=0.0))
+    assert lifted.head_filled.tolist() == hidden.tolist()
+    seen = ~hidden
+    np.testing.assert_allclose(lifted.demo.head[seen], demo.head[seen], atol=1e-9)
+    assert np.max(np.linalg.norm(lifted.demo.head - demo.head, axis=1)) < 0.05
+    np.testing.assert_allclose(lifted.demo.lengths, 0.4, atol=1e-9)
+
+
+def test_uncertainty_grows_with_pixel_noise_and_distance():
+    demo = planar_demo(0.5)
+    tracks = project_demo(demo, CAMERA)
+    small = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", pixel_noise=1.0))
+    large = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", pixel_noise=4.0))
+    assert np.all(large.head_sigma > small.head_sigma)
+    # 1 px at 3 m and f = 1000 px moves a point about 3 mm across the ray, and more along it
+    assert 0.003 < np.median(small.head_sigma) < 0.05
+
+
+def _spread_over_draws(demo: ToolDemo, settings: LiftSettings, noise: float, draws: int = 100):
+    """The lift of ``draws`` noisy copies of ``demo``'s tracks: per frame, the root mean square error
+    of head and handle end (m), the last lift, and the mean tool-axis error (degrees)."""
+    exact = project_demo(demo, CAMERA)
+    head, handle, axis = [], [], []
+    for seed in range(draws):
+        lifted = lift_tracks(perturbed(exact, noise, 0.0, seed), CAMERA, "spade", 24.0, settings)
+        head.append(np.linalg.norm(lifted.demo.head - demo.head, axis=1))
+        handle.append(np.linalg.norm(lifted.demo.handle - demo.handle, axis=1))
+        axis.append(np.degrees(np.arccos(np.clip(np.sum(lifted.demo.axis * demo.axis, axis=1), -1.0, 1.0))))
+    rms = [np.sqrt(np.mean(np.square(errors), axis=0)) for errors in (head, handle)]
+    return rms[0], rms[1], lifted, float(np.mean(axis))
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.5])
+def test_uncertainty_matches_the_spread_over_noise_draws(tilt):
+    # tilt 0: the tool seen side-on, its handle's ray tangent to the sphere of the tool's length in
+    # every frame (where a finite difference clamped at the tangent reported too little)
+    demo = planar_demo(tilt)
+    settings = LiftSettings(handle_hint="near", smoothing=0.0, pixel_noise=1.0, plane_point=(3.0, 0.0, 0.0))
+    head_rms, handle_rms, lifted, _ = _spread_over_draws(demo, settings, 1.0)
+    for rms, sigma in ((head_rms, lifted.head_sigma), (handle_rms, lifted.handle_sigma)):
+        ratio = rms / sigma
+        assert 0.7 < np.median(ratio) < 1.4, np.median(ratio)
+        assert np.min(ratio) > 0.3 and np.max(ratio) < 2.5, (np.min(ratio), np.max(ratio))
+
+
+def test_the_handle_depth_filter_removes_the_side_on_tools_tilt():
+    # Side-on, the handle's depth offset is the root of a small noisy number: each frame alone tilts
+    # the tool out of the plane by the noise (the lift without the offset filter measured 4.2 deg
+    # here); filtering the signed offset averages the near/far flips out.
+    demo = planar_demo(0.0)
+    _, _, lifted, axis = _spread_over_draws(demo, LiftSettings(handle_hint="near"), 3.0, draws=20)
+    assert axis < 3.9
+
+
+# --- refusals --------------------------------------------------------------------------------------
+def test_too_few_visible_frames():
+    tracks = project_demo(planar_demo(0.5), CAMERA)
+    seen = np.zeros(tracks.n_frames, dtype=bool)
+    seen[:15] = True
+    with pytest.raises(
+        TrackError, match=r"too few visible frames: the handle is seen in 15 of 40 frames \(need at least 20"
+    ):
+        lift_tracks(EndpointTracks(tracks.head, tracks.handle, tracks.head_visible, seen), CAMERA, "spade", 24.0, EXACT)
+
+
+def test_a_camera_that_sees_no_ground():
+    demo = planar_demo(0.0).translated([0.0, 0.0, 1.5])  # every head point above the camera's height
+    camera = look_at([0.0, 0.0, 1.2], [3.0, 0.0, 2.0])
+    with pytest.raises(TrackError, match="camera sees no ground: only 0 of the head's 40 rays point below the horizon"):
+        lift_tracks(project_demo(demo, camera), camera, "spade", 24.0, EXACT)
+
+
+def test_a_mirror_ambiguity_without_a_hint():
+    with pytest.raises(TrackError, match="mirror ambiguity.*--handle-hint near|far"):
+        lift_tracks(project_demo(held_still(), CAMERA), CAMERA, "spade", 24.0, EXACT)
+
+
+def test_a_camera_below_the_ground_and_one_looking_down():
+    tracks = project_demo(planar_demo(0.5), CAMERA)
+    below = look_at([0.0, 0.0, -0.2], [3.0, 0.0, 0.4])
+    with pytest.raises(TrackError, match="not above the ground"):
+        lift_tracks(tracks, below, "spade", 24.0, EXACT)
+    with pytest.raises(TrackError, match="looking straight up or down"):
+        look_at([0.0, 0.0, 3.0], [0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("handle_hint", "left"),
+        ("tool_length", 0.0),
+        ("plane_point", (1.0, 2.0)),
+        ("contact_share", 0.0),
+        ("smoothing", -1.0),
+    ],
+)
+def test_settings_refuse_bad_values(field, value):
+    with pytest.raises(InvalidSetting, match=field):
+        LiftSettings(**{field: value})
+
+
+# --- files -----------------------------------------------------------------------------------------
+def test_tracks_and_camera_files_round_trip(tmp_path):
+    tracks = perturbed(project_demo(planar_demo(0.5), CAMERA), 2.0, 0.1, seed=3)
+    write_tracks(tracks, tmp_path / "t.csv")
+    lines = (tmp_path / "t.csv").read_text().splitlines()
+    assert lines[0] == ",".join(TRACKS_HEADER) == "frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible"
+    assert sum(line.endswith(",0,0") for line in lines[1:]) == 4, "10 % of 40 frames dropped"
+    again = read_tracks(tmp_path / "t.csv")
+    np.testing.assert_allclose(again.head, tracks.head, atol=5e-4)
+    assert again.handle_visible.tolist() == tracks.handle_visible.tolist()
+    write_camera(CAMERA, tmp_path / "c.json")
+    data = json.loads((tmp_path / "c.json").read_text())
+    assert set(data) == {"width", "height", "K", "world_from_camera"}
+    camera = read_camera(tmp_path / "c.json")
+    np.testing.assert_allclose(camera.world_from_camera, CAMERA.world_from_camera)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("frame,head_u,head_v\n0,1,2\n", "line 1: expected the header"),
+        (
+            "frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible\n1,1,2,3,4,1,1\n",
+            "line 2: frame: expected 0",
+        ),
+        (
+            "frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible\n0,1,2,3,4,2,1\n",
+            "line 2: head_visible: expected 0 or 1, got '2'",
+        ),
+        (
+            "frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible\n0,1,x,3,4,1,1\n",
+            "line 2: head_v: expected a number",
+        ),
+        (
+            "frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible\n0,1,2,3,1,1\n",
+            "line 2: expected 7 fields, got 6",
+        ),
+        ("frame,head_u,head_v,handle_u,handle_v,head_visible,handle_visible\n", "no frames"),
+    ],
+)
+def test_bad_tracks_files(tmp_path, text, message):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(TrackError, match=message):
+        read_tracks(path)
+
+
+def test_an_unseen_end_may_have_empty_pixels(tmp_path):
+    path = tmp_path / "t.csv"
+    path.write_text(",".join(TRACKS_HEADER) + "\n0,1.5,2,,,1,0\n")
+    tracks = read_tracks(path)
+    assert tracks.handle_visible.tolist() == [False] and np.isnan(tracks.handle).all()
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"K": [[1000, 0, 640], [0, 1000, 360]]}, "K: expected a finite 3x3 matrix"),
+        ({"K": [[-5, 0, 640], [0, 1000, 360], [0, 0, 1]]}, "fx, fy > 0"),
+        ({"world_from_camera": np.diag([1.0, 1.0, -1.0, 1.0]).tolist()}, "reflection"),
+        ({"width": 0}, "width: expected a positive whole number"),
+        ({"K": [[1, "a"]]}, "nested lists of numbers"),
+    ],
+)
+def test_bad_camera_files(tmp_path, change, message):
+    data = {**CAMERA.to_json(), **change}
+    path = tmp_path / "camera.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(TrackError, match=message):
+        read_camera(path)
+    del data["K"]
+    path.write_text(json.dumps(data))
+    with pytest.raises(TrackError, match="missing field"):
+        read_camera(path)
+
+
+# --- the authors' real trajectories --------------------------------------------------------------
+def test_spade_video_1_seen_from_the_side_is_lifted_within_10_cm(video_demos_dir):
+    """The benchmark's setting (benchmarks/video_lift.py), one noise draw."""
+    truth, _, _ = load_video_trajectory(video_demos_dir / "spade_video1_aligned.npz")
+    camera = side_camera(truth.head)
+    tracks = perturbed(project_demo(truth, camera), 3.0, 0.05, seed=0)
+    lifted = lift_tracks(tracks, camera, "spade", truth.fps, LiftSettings(handle_hint="near")).demo
+    head_error = np.mean(np.linalg.norm(lifted.head - truth.head, axis=1))
+    axis_error = np.degrees(np.arccos(np.clip(np.sum(lifted.axis * truth.axis, axis=1), -1, 1)))
+    assert head_error < 0.10, f"mean head error {head_error:.3f} m"
+    assert np.median(axis_error) < 3.0, f"median axis error {np.median(axis_error):.2f} deg"
+    # Without a hint: a refusal (mirror ambiguity) or the true side, never a silently mirrored demo
+    # (on this noise draw the smoothest path is now clear enough not to be ambiguous; the refusal
+    # itself is tested exactly on held_still).
+    try:
+        unhinted = lift_tracks(tracks, camera, "spade", truth.fps, LiftSettings())
+    except TrackError as error:
+        assert "mirror ambiguity" in str(error)
+    else:
+        assert np.mean(unhinted.handle_far) < 0.5, "the handle end is on the near side of the head"
