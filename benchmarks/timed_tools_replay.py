@@ -2,8 +2,9 @@
 
 For each demonstration: stage ii (alignment, a quick budget) then stage iii (every candidate
 tracked by the robot and replayed in its scene). Prints, per demonstration, the best candidate's
-tool-alone replay reward (mean goal reward of its replays) and the best robot replay reward, and
-writes them as JSON. The issue's bar: both > 0 on all five demonstrations of each tool.
+alignment reward (``tool_alone``: mean goal reward of its replays of the whole aligned motion), the
+best robot replay reward (``robot``), and for the kept candidate its episode's tool-alone reward
+and both success rates (:func:`success_rates`), and writes them as JSON. The issue's bar: both > 0 on all five demonstrations of each tool.
 
     flock /work/heavy.lock python benchmarks/timed_tools_replay.py --out /tmp/timed --json results.json
 """
@@ -67,21 +68,29 @@ def measure(demo: str, out: Path, samples: int, candidates: int, starts: int, ro
 
 
 def success_rates(stage: TrajectoryStage, robot: str, tool: str, replays: int = 10) -> dict:
-    """The scene's success rate (its own test, e.g. the goal within the first second) of the kept
-    candidate's tool-alone replays and of the kept trajectory's robot replays."""
+    """The kept candidate's episode (the poses stage iii tracked): its length, the goal reward of its
+    tool-alone replays, and the scene's success rate (its own test, e.g. the goal within the first
+    second) of those replays and of the kept trajectory's robot replays."""
     trajectory = stage.trajectory
     assert trajectory.scene is not None
     k = trajectory.scene.candidate
     candidate = stage.candidates[k]
     scene = make_scene(tool, "3d")
     targets = candidate.targets
-    replay(scene, candidate.params, np.random.default_rng(k), ToolPose(targets.positions, targets.rotations), replays)
+    episode = ToolPose(targets.positions, targets.rotations)
+    tool_reward = float(np.mean(replay(scene, candidate.params, np.random.default_rng(k), episode, replays)))
     tool_success = float(np.mean(scene.is_success()))
     model = make_robot(robot, tool=tool)
     q = resample_joints(trajectory.q, trajectory.dt, scene.control_dt)
     positions, rotations = model.tool_poses(q, trajectory.base)
     replay(scene, candidate.params, np.random.default_rng(k), ToolPose(positions, rotations), replays)
-    return {"kept": k, "tool_alone_success": tool_success, "robot_success": float(np.mean(scene.is_success()))}
+    return {
+        "kept": k,
+        "episode_frames": len(targets.positions),
+        "tool_alone_episode": tool_reward,
+        "tool_alone_success": tool_success,
+        "robot_success": float(np.mean(scene.is_success())),
+    }
 
 
 def main() -> None:
