@@ -2,7 +2,8 @@
 
 For each (tool, world, robot): align a shipped demonstration (``data/demos``), optimise the robot's
 trajectory with selection by robot execution, and save the task (scene parameters, base, reference
-joints, horizon). The scythe's tasks align the 3D scene's hand-made pull instead (:data:`PULL`):
+joints, horizon). The scythe's tasks align the 3D scene's hand-made pulls instead (:data:`PULL`,
+:func:`~toolimit.scenes.spatial.sweep.pull_demonstration`):
 under the authors' cut rule (the snath within 30 degrees of horizontal, the blade pulled towards
 the handle) the shipped scythe demonstrations, swept around the body with the snath 40-55 degrees
 up, cut nothing. The stages are the pipeline's own functions (:mod:`toolimit.pipeline`) with their
@@ -21,12 +22,10 @@ from pathlib import Path
 import numpy as np
 
 from toolimit.align.config import AlignmentConfig
-from toolimit.demos import ToolDemo
 from toolimit.learn.shipped import shipped_task_path
 from toolimit.learn.task import task_from_pipeline
 from toolimit.pipeline import AlignSettings, TrajoptSettings, align_stage, trajopt_stage
-from toolimit.scenes.registry import scripted_motion
-from toolimit.tools import tool_spec
+from toolimit.scenes.spatial.sweep import pull_demonstration
 from toolimit.trajopt import TIME_SCALE_GRID
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,18 +39,8 @@ RECIPES: dict[tuple[str, str, str], tuple[str, int, tuple[float, ...]]] = {
     ("hammer", "3d", "panda"): ("hammer_00", 5, TIME_SCALE_GRID),
     ("scythe", "3d", "panda"): ("pull", 5, TIME_SCALE_GRID),
 }
-#: The scythe's demonstration: its 3D scene's scripted pulls for a patch there (m), after 0.75 s still.
+#: The scythe's demonstration: its 3D scene's scripted pulls for a patch there (m).
 PULL = {"grass_position": np.array([0.6, -0.3, 0.0])}
-PULL_LEAD_IN_FRAMES = 18
-
-
-def pull_demo() -> ToolDemo:
-    """The scythe's scripted pulls (:data:`PULL`) as a demonstration: head and handle-end points."""
-    motion = scripted_motion("scythe", "3d", PULL)
-    index = np.concatenate([np.zeros(PULL_LEAD_IN_FRAMES, dtype=int), np.arange(len(motion.position))])
-    head = motion.position[index]
-    handle = head + tool_spec("scythe").length * motion.rotation[index, :, 2]
-    return ToolDemo(head, handle, 24.0, "scythe", source="scythe 3d scripted_motion (make_learning_tasks.PULL)")
 
 
 def make_task(tool: str, world: str, robot: str, work: Path) -> Path:
@@ -59,7 +48,7 @@ def make_task(tool: str, world: str, robot: str, work: Path) -> Path:
     demo, candidates, time_scales = RECIPES[(tool, world, robot)]
     alignment, trajectory = work / f"{tool}_{world}_align", work / f"{tool}_{world}_{robot}_trajopt"
     align_settings = AlignSettings(search=AlignmentConfig(candidates=candidates), seed=0)
-    source = pull_demo() if demo == "pull" else ROOT / "data" / "demos" / f"{demo}.npz"
+    source = pull_demonstration(PULL) if demo == "pull" else ROOT / "data" / "demos" / f"{demo}.npz"
     align_stage(source, tool, world, alignment, align_settings, progress=False)
     trajopt_stage(alignment, robot, trajectory, TrajoptSettings(time_scales=time_scales), progress=False)
     task = task_from_pipeline(alignment, trajectory)

@@ -13,14 +13,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from toolimit.demos.tool_demo import ToolDemo
 from toolimit.scenes.base import CONTROL_FPS, SceneParams
 from toolimit.scenes.scythe_cut import scythe_cut_rule
-from toolimit.tools import ToolPose, hold_last
+from toolimit.tools import ToolPose, hold_last, tool_spec
 
 #: World-from-tool rotation of the level scythe: tool x = world x, tool y = world z, tool z = -y.
 LEVEL = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 #: How far the scripted pull raises the snath above horizontal (rad), turning about the blade.
 SNATH_ELEVATION = np.deg2rad(20.0)
+#: Seconds the demonstrator holds the scythe still before the pulls (:func:`pull_demonstration`).
+LEAD_IN_S = 0.75
 
 
 def raised(elevation: float) -> np.ndarray:
@@ -67,3 +70,15 @@ def scripted_sweep(params: SceneParams, fps: float = CONTROL_FPS, speed: float =
         np.concatenate([p.position for p in parts[:-1]]), np.concatenate([p.rotation for p in parts[:-1]])
     )
     return hold_last(motion, int(np.ceil(0.25 * fps)))
+
+
+def pull_demonstration(params: SceneParams, fps: float = CONTROL_FPS) -> ToolDemo:
+    """The scripted pulls for the patch at ``grass_position`` as a demonstration, after
+    :data:`LEAD_IN_S` still: head and handle-end points (the simulated scythe's length), world
+    frame, m, at ``fps``. The shipped scythe demonstrations sweep around the body with the snath
+    40-55 degrees up, which the authors' cut rule never rewards (README); this one it does."""
+    motion = scripted_sweep(params, fps)
+    index = np.concatenate([np.zeros(int(round(LEAD_IN_S * fps)), dtype=int), np.arange(len(motion.position))])
+    head = motion.position[index]
+    handle = head + tool_spec("scythe").length * motion.rotation[index, :, 2]
+    return ToolDemo(head, handle, fps, "scythe", source="toolimit.scenes.spatial.sweep.pull_demonstration")
