@@ -1,8 +1,10 @@
-"""Shared fixtures: the real video demonstrations in ../shared (skipped where absent)."""
+"""Shared fixtures: the real video demonstrations in ../shared (skipped where absent), a loopback
+Ray cluster (skipped where Ray is absent)."""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -25,3 +27,22 @@ def video_demos_dir() -> Path:
 @pytest.fixture(scope="session")
 def repo_root() -> Path:
     return REPO_ROOT
+
+
+@pytest.fixture(scope="session")
+def loopback_ray_cluster() -> Iterator[str]:
+    """The address of a Ray cluster of two nodes of one CPU each, on 127.0.0.1 only, for the whole
+    session (this process does not join it: a test passes the address, as ``--ray ADDRESS`` does);
+    skip where Ray is absent."""
+    pytest.importorskip("ray", reason='Ray is not installed (the extra: pip install -e ".[ray]")')
+    from ray.cluster_utils import Cluster
+
+    from toolimit.distributed import loopback_environment
+
+    with loopback_environment():
+        cluster = Cluster(
+            initialize_head=True, connect=False, head_node_args={"num_cpus": 1, "include_dashboard": False}
+        )
+        cluster.add_node(num_cpus=1)
+    yield cluster.address
+    cluster.shutdown()

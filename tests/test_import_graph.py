@@ -164,3 +164,20 @@ def test_only_the_command_line_and_the_tests_import_the_command_line():
     assert not offenders, "the command line is imported by a library module, script or notebook:\n" + "\n".join(
         offenders
     )
+
+
+# --- who may import Ray ------------------------------------------------------------------------
+#: The one module that imports Ray (the optional extra ``toolimit[ray]``).
+RAY_IMPORTER = "toolimit/distributed.py"
+
+
+def test_only_the_distributed_module_imports_ray():
+    importers = []
+    for path in sorted((REPO / PACKAGE).rglob("*.py")):
+        relative = path.relative_to(REPO)
+        module = ".".join(relative.with_suffix("").parts)
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        names = imported_names(tree, module, path.name == "__init__.py")
+        if any(name == "ray" or name.startswith("ray.") for name in names):
+            importers.append(relative.as_posix())
+    assert importers == [RAY_IMPORTER]

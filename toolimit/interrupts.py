@@ -48,7 +48,18 @@ def _handler(signum: int, frame: FrameType | None) -> None:
         _state.setdefault("held", signum)  # raised when :func:`starting_processes` ends
         return
     _state["interrupted"] = True
+    _state["signum"] = signum
     raise Interrupted(signum)
+
+
+def as_interrupted(stop: KeyboardInterrupt) -> Interrupted:
+    """``stop`` as an :class:`Interrupted`: a library that checks for signals inside its own calls
+    (Ray) raises a plain KeyboardInterrupt of its own after the handler ran; this names the signal
+    the handler saw (SIGINT when none did: a KeyboardInterrupt raised otherwise)."""
+    if isinstance(stop, Interrupted):
+        return stop
+    signum = _state.get("signum", signal.SIGINT)
+    return Interrupted(signum if isinstance(signum, int) else signal.SIGINT)
 
 
 def install() -> None:

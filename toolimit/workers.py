@@ -20,6 +20,7 @@ from collections.abc import Callable, Generator, Iterable
 from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any, TypeVar
 
+from toolimit.distributed import ordered_results_on_ray
 from toolimit.interrupts import starting_processes
 
 Result = TypeVar("Result")
@@ -42,9 +43,14 @@ def ordered_results(
     workers: int,
     initializer: Callable[..., None] | None = None,
     initargs: tuple[Any, ...] = (),
+    on_ray: bool = False,
 ) -> Generator[Result, None, None]:
     """``function(*args)`` for each ``args`` of ``arguments``, in order (module docstring); in
-    this process when ``workers`` is 1 (``initializer`` is then not called)."""
+    this process when ``workers`` is 1 (``initializer`` is then not called); ``on_ray``: on the
+    Ray cluster this process is connected to instead, one actor per CPU (``workers`` unused)."""
+    if on_ray:
+        yield from ordered_results_on_ray(function, arguments, initializer, initargs)
+        return
     if workers == 1:
         for args in arguments:
             yield function(*args)

@@ -36,6 +36,9 @@ def test_learn_with_adr_then_a_heat_map(tmp_path, capsys):
     assert svg.read_text().count('class="cell"') == 3 and rrd.is_file()
     record = json.loads((out / "evaluation.json").read_text())
     assert len(record["heat_map"]["goal_rewards"][0]) == 3 and record["heat_map"]["observes_box"]
+    assert record["heat_map"]["episodes"] == 4  # per position by default
+    assert main(["evaluate", "--policy", str(out), "--heat-map", str(svg), "--grid", "3", "--heat-map-episodes", "0"]) == 2
+    assert "--heat-map-episodes: must be an integer >= 1, got 0" in _error_line(capsys)
     assert main(["evaluate", "--policy", str(out), "--heat-map", str(tmp_path / "map.png")]) == 2
     assert "--heat-map: expected a .svg file name" in _error_line(capsys)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -99,7 +100,7 @@ def test_a_robot_that_cannot_track_the_scripted_motion_leaves_the_lfd_cell_missi
     def refuse(*args, **kwargs):
         raise BaseInsideFootprint("every one of the 4 solutions puts the robot base inside a scene element")
 
-    monkeypatch.setattr("toolimit.experiments.reproduce.kinesthetic_task", refuse)
+    monkeypatch.setattr("toolimit.experiments.methods.kinesthetic_task", refuse)
     monkeypatch.chdir(REPO)
     assert toolimit(["reproduce", "--preset", "quick", "--out", str(out), "--quiet"]) == 1
     said = [line for line in capsys.readouterr().out.splitlines() if "lfd:" in line]
@@ -214,3 +215,29 @@ def test_an_unknown_experiment_is_a_one_line_error(tmp_path: Path, capsys: pytes
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and "unknown spade-3d-kuka-spade_00" in error and "spade-3d-ur5-" in error
     assert not (tmp_path / "out").exists()
+
+
+def test_a_two_node_ray_cluster_measures_the_cells_of_a_local_run(
+    quick_results: Path,
+    loopback_ray_cluster: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Each kind of task once: the preparation (tool alone, trajectory), the method's learning run
+    (final) and a baseline's (LfD: its kinesthetic demonstration, then cloning and PPO)."""
+    out = tmp_path / "reproduce"
+    monkeypatch.chdir(REPO)
+    methods = ["--methods", "tool_only,trajopt,final,lfd"]
+    assert toolimit(["reproduce", "--preset", "quick", *methods, "--ray", loopback_ray_cluster, "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "[cluster] Ray at 127.0.0.1:" in said and "2 Ray nodes, 2 CPUs" in said
+    for method in ("tool_only", "trajopt", "final", "lfd"):
+        assert re.search(rf"\] {method}: goal reward .* \(node 127\.0\.0\.1/\w+, \d+ s\)", said), said
+        key = f"{EXPERIMENT}-{method}.json"
+        alone, on_ray = CellResult.load(quick_results / "cells" / key), CellResult.load(out / "cells" / key)
+        np.testing.assert_allclose(on_ray.goal_rewards, alone.goal_rewards, rtol=1e-6, atol=1e-6)
+        assert (on_ray.success_rate, on_ray.env_steps) == (alone.success_rate, alone.env_steps)
+    assert "/tmp/toolimit-task-" not in said  # the lines name the driver's folders
+    assert (out / EXPERIMENT / "lfd" / "learning" / "policy.zip").is_file()  # the tasks' files came back
+    assert (out / EXPERIMENT / "method" / "evaluation.json").is_file()

@@ -31,9 +31,10 @@ from toolimit.align.sampler import (
 )
 from toolimit.demos.cleaning import CleaningReport, clean_demo
 from toolimit.demos.tool_demo import ToolDemo
+from toolimit.distributed import Cluster, RayTarget, ray_cluster
 from toolimit.errors import InputError, InvalidSceneParameters
 from toolimit.interrupts import Interrupted, interruptible
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.replay import replay
@@ -269,12 +270,17 @@ def _chunks(first: int, total: int, size: int) -> Iterator[tuple[int, int]]:
 
 
 def _outcomes_in_order(
-    evaluator: SampleEvaluator, scene_factory: SceneFactory, config: AlignmentConfig, workers: int, first: int
+    evaluator: SampleEvaluator,
+    scene_factory: SceneFactory,
+    config: AlignmentConfig,
+    workers: int,
+    first: int,
+    on_ray: bool = False,
 ) -> Generator[list[SampleOutcome], None, None]:
     """Chunks of outcomes in index order from sample ``first``; the consumer stops when it has enough
-    (closing this generator ends the worker processes)."""
+    (closing this generator ends the worker processes, or the Ray actors with ``on_ray``)."""
     chunks = _chunks(first, config.samples, config.chunk_size)
-    if workers == 1:
+    if workers == 1 and not on_ray:
         for start, stop in chunks:
             yield evaluator.evaluate_range(start, stop)
         return
@@ -287,7 +293,7 @@ def _outcomes_in_order(
         evaluator.min_distance,
         evaluator.seed,
     )
-    yield from ordered_results(_evaluate_range_in_worker, chunks, workers, _init_worker, init_args)
+    yield from ordered_results(_evaluate_range_in_worker, chunks, workers, _init_worker, init_args, on_ray)
 
 
 def align(
@@ -301,6 +307,7 @@ def align(
     scene_factory: SceneFactory | None = None,
     checkpoint: str | Path | None = None,
     clean: bool = True,
+    ray: RayTarget = False,
 ) -> AlignmentResult:
     """Search scene parameters, scale, z offset and rolls under which ``demo`` reaches the goal.
 
@@ -312,10 +319,13 @@ def align(
         config: search settings (default :class:`AlignmentConfig`).
         seed: sample i uses ``np.random.default_rng([seed, i])``.
         workers: processes evaluating samples; the result does not depend on it.
-        progress: show a tqdm bar of the candidates found against K, with the samples examined.
+        progress: show a progress bar of the candidates found against K, with the samples examined.
         scene_factory: a picklable callable making the scene instead of the registry (tests,
             researchers' own scenes); every worker calls it once.
         clean: clean the demo before the search (default True; the report is ``result.cleaning``).
+        ray: batches of samples (``config.chunk_size`` each) as tasks on a Ray cluster
+            (:data:`~toolimit.distributed.RayTarget`), one actor per CPU, instead of ``workers``
+            local processes; the candidates are the same.
         checkpoint: a JSON file where the search saves its progress (every few seconds, and when
             interrupted) and from which it resumes when the file was made with the same demo,
             scene, seed and settings; it is removed when the search ends.
@@ -349,16 +359,40 @@ def align(
     previous_time = 0.0
     if checkpoint is not None and (state := load_checkpoint(checkpoint, key)) is not None:
         previous_time = _restore(result, state, evaluator)
+    with ray_cluster(ray) if ray else contextlib.nullcontext() as cluster:
+        _search(result, evaluator, scene_factory, workers, progress, checkpoint, key, previous_time, started, cluster)
+    result.wall_time_s = previous_time + time.perf_counter() - started
+    if checkpoint is not None:
+        Path(checkpoint).unlink(missing_ok=True)
+    return result
+
+
+def _search(
+    result: AlignmentResult,
+    evaluator: SampleEvaluator,
+    scene_factory: SceneFactory,
+    workers: int,
+    progress: bool,
+    checkpoint: str | Path | None,
+    key: dict[str, Any],
+    previous_time: float,
+    started: float,
+    cluster: Cluster | None,
+) -> None:
+    """Merge outcomes into ``result`` until it holds K candidates or the budget ends (see :func:`align`)."""
+    config = result.config
     # the search ends at the K-th candidate, usually long before the sample budget: count candidates
-    bar = tqdm(
+    bar = progress_bar(
         total=config.candidates,
         initial=len(result.candidates),
-        desc=f"align {tool}/{world}",
+        desc=f"align {result.tool}/{result.world}" + ("" if cluster is None else f" on {cluster.summary()}"),
         unit="candidate",
         disable=not progress,
     )
     last_save = time.perf_counter()
-    chunks = _outcomes_in_order(evaluator, scene_factory, config, workers, first=result.samples_tried)
+    chunks = _outcomes_in_order(
+        evaluator, scene_factory, config, workers, first=result.samples_tried, on_ray=cluster is not None
+    )
     with interruptible():
         try:
             with bar, contextlib.closing(chunks):  # closing the generator ends the worker processes
@@ -383,10 +417,6 @@ def align(
                 save_checkpoint(checkpoint, key, _state(result))
                 saved = Path(checkpoint)
             raise SearchInterrupted(stop.signum, result.samples_tried, len(result.candidates), saved) from None
-    result.wall_time_s = previous_time + time.perf_counter() - started
-    if checkpoint is not None:
-        Path(checkpoint).unlink(missing_ok=True)
-    return result
 
 
 class SearchInterrupted(Interrupted):

@@ -134,6 +134,27 @@ def add_out_argument(parser: argparse.ArgumentParser, what: str = "output folder
     parser.add_argument("--out", required=True, type=Path, help=what)
 
 
+def add_ray_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--ray [ADDRESS]``: ``what`` on a Ray cluster (:data:`toolimit.distributed.RayTarget`)."""
+    parser.add_argument(
+        "--ray",
+        nargs="?",
+        const=True,
+        default=False,
+        metavar="ADDRESS",
+        help=f"{what} on a Ray cluster: the one at ADDRESS (e.g. 10.0.0.5:6379), else RAY_ADDRESS's, else a "
+        'private Ray on this machine, on 127.0.0.1 only, for this run (needs pip install "toolimit[ray]")',
+    )
+
+
+def check_ray(target: bool | str) -> None:
+    """CliError-like one line (exit 2) for ``--ray`` without Ray installed; checked before any work."""
+    if target:
+        from toolimit.distributed import require_ray
+
+        require_ray()
+
+
 def add_frame_argument(parser: argparse.ArgumentParser) -> None:
     """``--frame``: the orientation convention of a poses file (see :func:`load_poses`)."""
     parser.add_argument(

@@ -2,7 +2,8 @@
 
 The command line of :func:`toolimit.pipeline.align_stage`; its flags are the fields of
 :class:`toolimit.pipeline.AlignSettings`. Writes ``DIR/alignment.json`` (the search's record),
-``DIR/candidates.npz`` and ``DIR/aligned_demo.npz`` (the best candidate's aligned motion); optionally a rerun recording (``--rerun``) and, in the 3d world, the
+``DIR/candidates.npz`` and ``DIR/aligned_demo.npz`` (the best candidate's aligned motion); ``--ray``
+evaluates batches of samples on a Ray cluster (same candidates); optionally a rerun recording (``--rerun``) and, in the 3d world, the
 best candidate's replay as a self-contained HTML page (``--html``). An interrupted search (SIGINT,
 e.g. Ctrl-C: exit code 130; SIGTERM: 143) saves ``DIR/alignment_checkpoint.json`` if any sample
 finished; the same command then resumes it. Exit codes: 0 found, 1 no candidate within the budget (the record
@@ -18,9 +19,11 @@ from pathlib import Path
 from toolimit.cli import (
     CliError,
     add_out_argument,
+    add_ray_argument,
     add_scene_arguments,
     check_output_file,
     check_output_folder,
+    check_ray,
     check_scene,
     check_writable_folder,
 )
@@ -55,6 +58,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="3d world only: also save the best candidate's replay as a self-contained meshcat page (.html)",
     )
+    add_ray_argument(parser, "batches of samples as tasks")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
@@ -73,6 +77,7 @@ def _check_arguments(args: argparse.Namespace) -> AlignSettings:
         if args.world != "3d":
             raise CliError(f"--html: the meshcat replay draws the 3d worlds, not the {args.world} world")
         check_writable_folder(args.html.parent, "--html")
+    check_ray(args.ray)
     return settings
 
 
@@ -87,7 +92,9 @@ def run(args: argparse.Namespace) -> int:
     if checkpoint.is_file():
         print(f"found {checkpoint}: the search resumes from it if it was made with the same settings")
     try:
-        result = align_stage(args.demo, args.tool, args.world, args.out, settings, progress=not args.quiet)
+        result = align_stage(
+            args.demo, args.tool, args.world, args.out, settings, progress=not args.quiet, ray=args.ray
+        )
     except SearchInterrupted as stop:
         found = f"{stop.samples_tried} samples examined, {stop.candidates} candidate(s)"
         if stop.checkpoint is not None:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 
 from toolimit.cli import CliError, check_output_file, check_writable_folder
 from toolimit.cli.flags import Flag, add_flags, apply_flags
+from toolimit.learn.heat_map import EPISODES_PER_CELL
 from toolimit.pipeline.settings import EvaluationSettings
 
 if TYPE_CHECKING:
@@ -42,6 +43,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--heat-map", type=Path, default=None, help="also write the goal-box heat map to this .svg (spades)"
     )
     parser.add_argument("--grid", type=int, default=9, help="with --heat-map: box positions per axis (default: 9)")
+    parser.add_argument(
+        "--heat-map-episodes",
+        type=int,
+        default=None,
+        help=f"with --heat-map: deterministic episodes per position (default: {EPISODES_PER_CELL})",
+    )
     parser.add_argument("--rerun", type=Path, default=None, help="with --heat-map: also log it to this .rrd")
     parser.set_defaults(func=run)
 
@@ -61,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.rerun, "--rerun", ".rrd")
     if args.grid < 2:
         raise CliError(f"--grid: must be an integer >= 2, got {args.grid}")
+    if args.heat_map_episodes is not None and args.heat_map_episodes < 1:
+        raise CliError(f"--heat-map-episodes: must be an integer >= 1, got {args.heat_map_episodes}")
     evaluation = evaluate_stage(args.policy, settings)
     record = evaluation.record
     if args.heat_map is not None:
@@ -81,7 +90,8 @@ def _heat_map(args: argparse.Namespace, evaluation: PolicyEvaluation, seed: int)
     from toolimit.viz.svg_heat_map import heat_map_svg
 
     task = evaluation.task
-    heat_map = goal_box_heat_map(evaluation.model, task, grid=args.grid, seed=seed)
+    episodes = EPISODES_PER_CELL if args.heat_map_episodes is None else args.heat_map_episodes
+    heat_map = goal_box_heat_map(evaluation.model, task, grid=args.grid, episodes=episodes, seed=seed)
     kind = "learned with ADR" if heat_map.observes_box else "learned without ADR (the box is not observed)"
     save_text(args.heat_map, heat_map_svg(heat_map, f"{task.robot} {task.tool} ({task.world}), policy {kind}"))
     if args.rerun is not None:

@@ -45,6 +45,9 @@ LEARNING_FLAGS = (
     Flag("reward", choices=REWARDS),
     Flag("adr"),
     Flag("adr_every"),
+    Flag("early_stop"),
+    Flag("stop.every", name="--stop-every"),
+    Flag("stop.episodes", name="--stop-episodes"),
     Flag("checkpoint_every"),
     Flag("seed"),
 )

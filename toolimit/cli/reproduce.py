@@ -5,7 +5,8 @@ preset runs and where each cell goes). ``--demo`` replaces the preset's demonstr
 ``--experiment`` keeps some of its experiments and ``--methods`` some of the methods (e.g. the method
 and the sparse baseline first, ``--methods final,sparse_ppo``; the others on a later run into the
 same folder). ``--jobs N`` runs N experiments at a time, each in a child process whose output goes
-to OUT/logs/<experiment>.log. Exit codes: 0 done, 1 an experiment's pipeline found nothing or its
+to OUT/logs/<experiment>.log. ``--ray [ADDRESS]`` runs them on a Ray cluster instead
+(:mod:`toolimit.experiments.on_cluster`), the log naming the node of each cell. Exit codes: 0 done, 1 an experiment's pipeline found nothing or its
 robot cannot track the scripted motion of LfD so that it earns (those cells are missing from the
 results; a line says why), 2 bad input, 130 interrupted.
 """
@@ -16,7 +17,15 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from toolimit.cli import CliError, add_out_argument, add_seed_argument, check_count, check_output_folder
+from toolimit.cli import (
+    CliError,
+    add_out_argument,
+    add_ray_argument,
+    add_seed_argument,
+    check_count,
+    check_output_folder,
+    check_ray,
+)
 from toolimit.experiments.cells import METHODS, Experiment
 from toolimit.experiments.reproduce import PRESETS, Preset, preset
 
@@ -57,6 +66,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="experiments run at a time, each in its own process (default: 1; each also uses its own "
         "worker processes for stage iii's selection); results do not depend on it",
     )
+    add_ray_argument(parser, "every experiment's preparation and learning runs as tasks")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run)
 
@@ -105,6 +115,7 @@ def run(args: argparse.Namespace) -> int:
     check_count("--jobs", args.jobs)
     check_count("--seed", args.seed, minimum=0)
     check_output_folder(args.out, "--out")
+    check_ray(args.ray)
     return reproduce(
         chosen,
         args.out,
@@ -113,4 +124,5 @@ def run(args: argparse.Namespace) -> int:
         jobs=args.jobs,
         progress=not args.quiet,
         report=lambda name, line: print(f"[{name}] {line}", flush=True),
+        ray=args.ray,
     )

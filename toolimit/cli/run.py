@@ -16,10 +16,12 @@ from pathlib import Path
 from toolimit.cli import (
     CliError,
     add_out_argument,
+    add_ray_argument,
     add_seed_argument,
     add_tool_argument,
     add_world_argument,
     check_output_folder,
+    check_ray,
 )
 from toolimit.cli.align import SEARCH_FLAGS
 from toolimit.cli.flags import Flag, add_flags, apply_flags, nested
@@ -51,6 +53,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--quick", action="store_true", help=f"tiny budgets for a first try or CI (flags given explicitly win): {QUICK}"
     )
+    add_ray_argument(parser, "the alignment's samples and the robot selection's candidates as tasks (learning here)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run)
 
@@ -84,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.demo.is_file():
         raise CliError(f"--demo: no such file: {args.demo}")
     check_output_folder(args.out, "--out")
+    check_ray(args.ray)
     result = run_pipeline(
         args.demo,
         args.out,
@@ -93,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         settings,
         progress=not args.quiet,
         on_stage=lambda stage, line: print(f"[{stage}] {line}", flush=True),
+        ray=args.ray,
     )
     record = result.evaluation
     print(

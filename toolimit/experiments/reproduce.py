@@ -27,7 +27,6 @@ it: every experiment is seeded on its own).
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import sys
 import time
@@ -36,21 +35,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from toolimit.artifacts import save_json
-from toolimit.errors import (
-    BaseInsideFootprint,
-    InputError,
-    NoKinestheticDemonstration,
-    NoScriptedMotion,
-    SolverFailure,
-    StageFoundNothing,
-)
+from toolimit.distributed import RayTarget
+from toolimit.errors import InputError, StageFoundNothing
 from toolimit.experiments.cells import METHODS, PIPELINE_METHODS, CellResult, Experiment
-from toolimit.experiments.measure import measure_policy, measure_tool_only, measure_trajopt
+from toolimit.experiments.methods import Report, measure_method, missing_methods
+from toolimit.experiments.on_cluster import reproduce_on_cluster
 from toolimit.experiments.report import write_results
 from toolimit.interrupts import SIGNALS, Interrupted
-from toolimit.learn.kinesthetic import kinesthetic_task
 from toolimit.learn.task import TASK_NPZ, LearningTask
-from toolimit.learn.training import learn_policy
 from toolimit.pipeline.run import run_pipeline
 from toolimit.pipeline.settings import PipelineSettings
 
@@ -58,12 +50,7 @@ from toolimit.pipeline.settings import PipelineSettings
 REAL_SPADE_RECORDING = Path("../shared/data/video_demos/spade_video1_aligned.npz")
 REAL_HAMMER_RECORDING = Path("../shared/data/video_demos/hammer_video1_aligned.npz")
 SHIPPED_DEMOS = Path("data/demos")
-#: The baselines' rewards (``LearningConfig.reward``), both learnt from a random policy.
-BASELINE_REWARDS = {"sparse_ppo": "sparse", "dense_ppo": "dense"}
 PRESETS = ("quick", "planar", "full")
-
-#: ``report(experiment name, line)``: a line for a person about one experiment.
-Report = Callable[[str, str], None]
 
 
 @dataclass(frozen=True)
@@ -112,12 +99,15 @@ def reproduce(
     jobs: int = 1,
     progress: bool = True,
     report: Report | None = None,
+    ray: RayTarget = False,
 ) -> int:
     """Measure every missing cell of ``chosen``'s experiments for ``methods`` into ``out`` and write
-    the results (module docstring). Returns 0, or 1 when an experiment's pipeline found nothing or
-    its robot cannot track LfD's scripted motion so that it earns (those cells are missing; the
-    report says why). Raises :class:`~toolimit.interrupts.Interrupted` when a step (or a child) was
-    interrupted, after every finished cell was saved."""
+    the results (module docstring). ``ray``: on a Ray cluster instead, every preparation and
+    learning run a task (:mod:`toolimit.experiments.on_cluster`; ``jobs`` unused), same cells.
+    Returns 0, or 1 when an experiment's pipeline found nothing or its robot cannot track LfD's
+    scripted motion so that it earns (those cells are missing; the report says why). Raises
+    :class:`~toolimit.interrupts.Interrupted` when a step (or a child, or a task) was interrupted,
+    after every finished cell was saved."""
     out = Path(out)
     say = report or (lambda name, line: None)
 
@@ -126,7 +116,10 @@ def reproduce(
         return write_results(out, cells, {"name": chosen.name, "quick": chosen.quick, "seed": seed})
 
     code = 0
-    if jobs > 1 and len(chosen.experiments) > 1:
+    if ray:
+        settings = {e: chosen.settings(e.world, seed) for e in chosen.experiments}
+        code = reproduce_on_cluster(settings, out, methods, ray, progress, say, results)
+    elif jobs > 1 and len(chosen.experiments) > 1:
         code = _run_children(chosen, out, seed, methods, jobs, say, results)
     else:
         for experiment in chosen.experiments:
@@ -147,19 +140,16 @@ def reproduce_experiment(
 ) -> int:
     """Run the pipeline and the baselines of one experiment and save its missing cells; 0, or 1
     when the pipeline found nothing or LfD has no kinesthetic demonstration."""
-    cells_dir, folder = out / "cells", out / experiment.name
-    missing = [
-        m for m in methods if m in experiment.methods and not (cells_dir / f"{experiment.cell_key(m)}.json").is_file()
-    ]
+    missing = missing_methods(experiment, out, methods)
     if not missing:
         say(experiment.name, "done earlier")
         return 0
     settings = chosen.settings(experiment.world, seed)
-    method_dir = folder / "method"
+    folder = out / experiment.name
     try:
         pipeline = run_pipeline(
             experiment.demo,
-            method_dir,
+            folder / "method",
             experiment.tool,
             experiment.robot,
             experiment.world,
@@ -170,40 +160,16 @@ def reproduce_experiment(
     except StageFoundNothing as nothing:
         say(experiment.name, f"the pipeline found nothing, no cells for this experiment: {nothing}")
         return 1
-    task = LearningTask.load(method_dir / "learning" / TASK_NPZ)
-    episodes, evaluation_seed = settings.evaluation.episodes, settings.evaluation.seed
+    task = LearningTask.load(folder / "method" / "learning" / TASK_NPZ)
     code = 0
     for method in missing:
-        if method == "tool_only":
-            cell = measure_tool_only(experiment, task, episodes, evaluation_seed)
-        elif method == "trajopt":
-            cell = measure_trajopt(experiment, task, episodes, evaluation_seed)
-        elif method == "final":
-            cell = measure_policy(experiment, method, method_dir / "learning", episodes, evaluation_seed)
-            cell = dataclasses.replace(cell, wall_time_s=pipeline.evaluation["wall_time_s"])
-        else:
-            learning = folder / method / "learning" if method == "lfd" else folder / method
-            if method == "lfd":
-                try:
-                    learned_task = kinesthetic_task(
-                        task,
-                        folder / method,
-                        settings.trajopt.track_options(),
-                        settings.trajopt.time_scales,
-                        seed=settings.learning.seed,
-                    )
-                except (BaseInsideFootprint, NoKinestheticDemonstration, SolverFailure, NoScriptedMotion) as refusal:
-                    say(experiment.name, f"lfd: no kinesthetic demonstration, no cell: {refusal}")
-                    code = 1
-                    continue
-                config = settings.learning
-            else:
-                learned_task = task
-                config = dataclasses.replace(settings.learning, clone=False, reward=BASELINE_REWARDS[method])
-            say(experiment.name, f"{method}: learning in {learning}")
-            learn_policy(learned_task, learning, config, progress=progress)
-            cell = measure_policy(experiment, method, learning, episodes, evaluation_seed)
-        save_json(cells_dir / f"{experiment.cell_key(method)}.json", cell.record())
+        cell = measure_method(
+            experiment, method, folder, task, settings, progress, say, pipeline.evaluation["wall_time_s"]
+        )
+        if cell is None:
+            code = 1
+            continue
+        save_json(out / "cells" / f"{experiment.cell_key(method)}.json", cell.record())
         say(experiment.name, f"{method}: goal reward {cell.goal_reward:.1f}, success {cell.success_rate:.2f}")
     return code
 

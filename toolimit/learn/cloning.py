@@ -26,7 +26,7 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 from toolimit.errors import InputError
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 
 #: The authors' fixed standard deviation of the joint velocities, rad/s.
 AUTHORS_ACTION_STD = 0.2
@@ -210,7 +210,7 @@ def _fit(
     everything = slice(None)
     with torch.no_grad():
         losses = [float(loss_of(everything))]
-    for step in tqdm(range(steps), desc=description, unit="step", disable=not progress, leave=False):
+    for step in progress_bar(range(steps), desc=description, unit="step", disable=not progress, leave=False):
         rows = everything if size <= batch_size else torch.randint(size, (batch_size,), generator=generator)
         optimiser.zero_grad()
         loss = loss_of(rows)

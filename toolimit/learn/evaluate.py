@@ -68,9 +68,14 @@ def evaluate(
     if episodes < 1:
         raise InputError(f"episodes must be >= 1, got {episodes!r}")
     env = BatchedTaskVecEnv(task, episodes, seed=seed, scene_kwargs=scene_kwargs, adr=observes_goal_box(model, task))
+    return rollout(model, env, deterministic)
+
+
+def rollout(model: BaseAlgorithm, env: BatchedTaskVecEnv, deterministic: bool = True) -> Evaluation:
+    """One episode in each of ``env``'s instances, from its next reset (its seed decides them)."""
     observation = env.reset()
     joints = [env.simulator.q.copy()]
-    returns = np.zeros(episodes)
+    returns = np.zeros(env.num_envs)
     while True:
         action, _ = model.predict(observation, deterministic=deterministic)
         stepped, reward, done, infos = env.step(action)

@@ -29,6 +29,10 @@ from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
 from toolimit.robots import RobotModel
 
+#: Deterministic episodes per cell by default: the reset noise (start joints, deposit, sand) varies
+#: between them, and one episode per cell let a single lucky or unlucky reset decide a cell.
+EPISODES_PER_CELL = 4
+
 #: The grid spans the ADR rectangle scaled by this factor (1.5: 150 x 135 cm).
 COVER = 1.5
 #: Uniform joint samples and local-search steps of :func:`tool_reach`.
@@ -118,7 +122,7 @@ def goal_box_heat_map(
     model: BaseAlgorithm,
     task: LearningTask,
     grid: int = 9,
-    episodes: int = 1,
+    episodes: int = EPISODES_PER_CELL,
     seed: int = EVALUATION_SEED,
     scene_kwargs: dict[str, Any] | None = None,
     batch_size: int = 32,

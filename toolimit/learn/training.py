@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import numbers
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, cast
@@ -31,6 +31,7 @@ from toolimit.learn.adr import EVERY as ADR_EVERY
 from toolimit.learn.adr import goal_box_spec
 from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
+from toolimit.learn.early_stop import EarlyStop, StopRule
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
     POLICY_ZIP,
@@ -43,7 +44,7 @@ from toolimit.learn.ppo import (
 from toolimit.learn.simulator import REWARDS
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 from toolimit.scenes.registry import make_scene
 
 LEARNING_JSON = "learning.json"
@@ -82,6 +83,10 @@ class LearningConfig:
         adr: domain randomisation of the goal box (spades, :mod:`toolimit.learn.adr`): the box is
             observed, cloned at the aligned position, then moved by the boundary tests.
         adr_every: PPO updates between two boundary tests of ADR.
+        early_stop: end PPO once the policy has learnt (``stop``'s rule,
+            :mod:`toolimit.learn.early_stop`) instead of spending the whole budget (the paper's
+            fixed budget when off); never under ADR.
+        stop: the early-stopping rule (checks every few updates, success to hold).
     """
 
     timesteps: int = 300_000
@@ -100,6 +105,8 @@ class LearningConfig:
     torch_threads: int = 1
     adr: bool = False
     adr_every: int = ADR_EVERY
+    early_stop: bool = True
+    stop: StopRule = StopRule()
 
     def __post_init__(self) -> None:
         """InvalidLearningConfig, naming the field, for a value no run can use: refused here, before
@@ -126,6 +133,10 @@ class LearningConfig:
             raise InvalidLearningConfig("preset", f"unknown preset {self.preset!r}; choose one of {', '.join(PRESETS)}")
         if self.reward not in REWARDS:
             raise InvalidLearningConfig("reward", f"unknown reward {self.reward!r}; choose one of {', '.join(REWARDS)}")
+        if isinstance(self.stop, Mapping):  # as ``asdict`` and learning.json write it
+            object.__setattr__(self, "stop", StopRule(**self.stop))
+        if not isinstance(self.stop, StopRule):
+            raise InvalidLearningConfig("stop", f"must be a StopRule, got {self.stop!r}")
 
     def settings(self) -> PpoSettings:
         """The PPO settings of the preset."""
@@ -142,12 +153,20 @@ class LearningOutcome:
 
 
 class _Curve(BaseCallback):
-    """Appends one line per update to ``curve.jsonl`` and hands it to ``on_record`` (e.g. rerun)."""
+    """Appends one line per update to ``curve.jsonl`` (with the early-stopping check of the update,
+    if one was made) and hands it to ``on_record`` (e.g. rerun)."""
 
-    def __init__(self, path: Path, total: int, on_record: Callable[[dict[str, Any]], None] | None, progress: bool):
+    def __init__(
+        self,
+        path: Path,
+        total: int,
+        on_record: Callable[[dict[str, Any]], None] | None,
+        progress: bool,
+        checks: EarlyStop | None,
+    ):
         super().__init__()
-        self.path, self.on_record = path, on_record
-        self.bar = tqdm(total=total, desc="PPO", unit="step", disable=not progress, leave=False)
+        self.path, self.on_record, self.checks = path, on_record, checks
+        self.bar = progress_bar(total=total, desc="PPO", unit="step", disable=not progress, leave=False)
         self.returns: list[float] = []
         self.successes: list[bool] = []
         self.goals: list[float] = []
@@ -177,6 +196,12 @@ class _Curve(BaseCallback):
             if self.returns
             else None
         )
+        if self.pending is not None:
+            self.bar.set_postfix(
+                success=f"{self.pending['success_rate']:.2f}",
+                goal=f"{self.pending['goal_reward_mean']:.1f}",
+                refresh=False,
+            )
         self.returns, self.successes, self.goals = [], [], []
 
     def _on_rollout_start(self) -> None:
@@ -193,6 +218,7 @@ class _Curve(BaseCallback):
             "action_std_mean": float(torch.exp(cast(torch.Tensor, self.model.policy.log_std).detach()).mean()),
             "approx_kl": float(logged.get("train/approx_kl", float("nan"))),
             **(adr.bounds.record() if adr is not None else {}),
+            **(self.checks.take_record() if self.checks is not None else {}),
         }
         with open(self.path, "a") as handle:
             handle.write(json.dumps(record) + "\n")
@@ -249,11 +275,18 @@ def _learn_policy(
     previous = _previous_record(out_dir)
     model, resumed = resume_or_start(out_dir, env, start)
     curve = out_dir / CURVE_JSONL
-    _truncate_curve(curve, model.num_timesteps)
-    callbacks: list[BaseCallback] = [_Curve(curve, config.timesteps, on_record, progress)]
+    lines = _truncate_curve(curve, model.num_timesteps)
+    checks = (
+        EarlyStop(task, config.stop, lines, config.scene_kwargs, config.reward)
+        if config.early_stop and not config.adr
+        else None
+    )
+    callbacks: list[BaseCallback] = [] if checks is None else [checks]  # before the curve: its line holds the check
+    callbacks.append(_Curve(curve, config.timesteps, on_record, progress, checks))
     if config.adr:  # after the curve: a line holds the bounds its episodes were drawn in
         callbacks.append(AdrCallback(env, config.adr_every))
-    train(model, config.timesteps, out_dir, config.checkpoint_every, callbacks)
+    learnt = checks is not None and checks.stopped_at is not None  # a resumed run that had stopped
+    train(model, model.num_timesteps if learnt else config.timesteps, out_dir, config.checkpoint_every, callbacks)
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
     simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
@@ -271,6 +304,8 @@ def _learn_policy(
         "learning_time_s": wall - simulation,
         "resumed": resumed,
     }
+    if checks is not None:
+        record["early_stop"] = {"stopped_at_ppo_env_steps": checks.stopped_at, "rule": asdict(config.stop)}
     if env.adr is not None:
         record["adr"] = env.adr.record(config.adr_every)
     save_json(out_dir / LEARNING_JSON, record)
@@ -323,12 +358,15 @@ def _previous_record(out_dir: Path) -> dict[str, Any]:
     return {}
 
 
-def _truncate_curve(path: Path, env_steps: int) -> None:
-    """Drop curve lines beyond ``env_steps`` (written after the checkpoint a run resumes from)."""
+def _truncate_curve(path: Path, env_steps: int) -> list[dict[str, Any]]:
+    """Drop curve lines beyond ``env_steps`` (written after the checkpoint a run resumes from);
+    the lines kept."""
     if not path.is_file():
-        return
-    lines = [line for line in path.read_text().splitlines() if json.loads(line)["env_steps"] <= env_steps]
-    path.write_text("".join(line + "\n" for line in lines))
+        return []
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    kept = [line for line in lines if line["env_steps"] <= env_steps]
+    path.write_text("".join(json.dumps(line) + "\n" for line in kept))
+    return kept
 
 
 def load_policy(directory: str | Path) -> tuple[PPO, LearningTask]:

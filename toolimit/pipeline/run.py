@@ -6,15 +6,17 @@ demonstration -> alignment (OUT/alignment) -> trajectory with selection by robot
 with published limits). Called again on the same folder, it skips every finished stage and resumes
 the first unfinished one from its checkpoint (the alignment and the learning save theirs).
 OUT/run.json keeps each stage's wall time; OUT/evaluation.json has ``success_rate``,
-``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included) and
-``wall_time_s`` (alignment to evaluation, over every call).
+``goal_reward_mean``, ``episodes``, ``env_steps`` (training, cloning rollouts included),
+``wall_time_s`` (alignment to evaluation, over every call) and ``early_stop`` (the rule and the PPO
+steps where it ended learning, None if it ran its whole budget; None when off).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,6 +24,7 @@ from typing import Any
 from toolimit.align.outputs import ALIGNMENT_JSON, alignment_finished
 from toolimit.artifacts import save_json
 from toolimit.demos import ToolDemo
+from toolimit.distributed import RayTarget, ray_cluster
 from toolimit.errors import InputError
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.pipeline.settings import PipelineSettings
@@ -76,66 +79,39 @@ def run_pipeline(
     settings: PipelineSettings | None = None,
     progress: bool = True,
     on_stage: StageReport | None = None,
+    ray: RayTarget = False,
 ) -> PipelineResult:
     """Run (or resume) every stage for ``tool`` and ``robot`` in ``world`` from ``demo`` (a
     ToolDemo or a demonstration file) into ``out``; see the module docstring.
 
     ``settings`` default to :meth:`PipelineSettings.for_world`. ``on_stage`` receives each
-    stage's lines for a person. Raises InputError when a finished stage in ``out`` was made for
-    another tool, world or robot, StageFoundNothing when the alignment or the robot's selection
-    finds nothing, and KeyboardInterrupt (:mod:`toolimit.interrupts`) after the interrupted stage
-    saved its checkpoint.
+    stage's lines for a person. ``ray`` (:data:`~toolimit.distributed.RayTarget`): the alignment's
+    samples and the robot selection's candidates run on a Ray cluster instead of local worker
+    processes (same results); the learning run is one process, here. Raises InputError when a
+    finished stage in ``out`` was made for another tool, world or robot, StageFoundNothing when the
+    alignment or the robot's selection finds nothing, and KeyboardInterrupt
+    (:mod:`toolimit.interrupts`) after the interrupted stage saved its checkpoint.
     """
     out = Path(out)
     settings = settings if settings is not None else PipelineSettings.for_world(world)
-    report = on_stage or (lambda stage, line: None)
-    alignment, trajectory, learning = (out / stage for stage in STAGES)
-    times = _stage_times(out)
-
-    def timed(stage: str, work: Callable[[], Any]) -> Any:
-        started = time.perf_counter()
-        try:
-            return work()
-        finally:
-            times[stage] = times.get(stage, 0.0) + time.perf_counter() - started
-            save_json(out / RUN_JSON, {"stage_times_s": times})
-
-    finished = {
-        "alignment": alignment_finished(alignment),
-        "trajectory": (trajectory / TRAJECTORY_NPZ).is_file(),
-        "learning": learning_finished(learning),
-    }
-    for stage in STAGES:
-        if finished[stage]:
-            _check_same_run(out / stage, {"tool": tool, "world": world, "robot": robot})
-            report(stage, f"done earlier: {out / stage}")
-            continue
-        report(stage, "started")
-        if stage == "alignment":
-            result = timed(stage, lambda: align_stage(demo, tool, world, alignment, settings.align, progress))
-            lines = describe_alignment(result)
-        elif stage == "trajectory":
-            made = timed(stage, lambda: trajopt_stage(alignment, robot, trajectory, settings.trajopt, progress, tool))
-            lines = describe_trajectory(made)
-        else:
-            outcome = timed(stage, lambda: learn_stage(alignment, trajectory, learning, settings.learning, progress))
-            record = outcome.record
-            lines = [
-                f"{record['env_steps']} env steps ({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s"
-            ]
-        for line in lines:
-            report(stage, line)
-    evaluation = timed("evaluation", lambda: evaluate_stage(learning, settings.evaluation))
+    with ray_cluster(ray) if ray else contextlib.nullcontext():  # stopped before learning, which runs here
+        run_stages(demo, out, tool, robot, world, settings, progress, on_stage, STAGES[:2], ray=ray)
+    run_stages(demo, out, tool, robot, world, settings, progress, on_stage, STAGES[2:])
+    learning = out / "learning"
+    evaluation = _timed(out, "evaluation", lambda: evaluate_stage(learning, settings.evaluation))
     learned = learning_record(learning)
+    times = _stage_times(out)
     record = evaluation.record | {
         "env_steps": learned["env_steps"],
         "wall_time_s": sum(times.values()),
         "stage_times_s": times,
         "simulation_time_s": learned["simulation_time_s"],
         "learning_time_s": learned["learning_time_s"],
+        "early_stop": learned.get("early_stop"),
     }
     save_json(out / EVALUATION_JSON, record)
     export = export_stage(evaluation, out, settings.export)
+    report = on_stage or (lambda stage, line: None)
     report(
         "export",
         f"retimed within the {robot}'s limits: {export}"
@@ -143,6 +119,70 @@ def run_pipeline(
         else f"skipped: the {robot} has no published acceleration and jerk limits (its rollout: {out / 'policy_rollout'})",
     )
     return PipelineResult(out, record, export)
+
+
+def run_stages(
+    demo: ToolDemo | str | Path,
+    out: Path,
+    tool: str,
+    robot: str,
+    world: str,
+    settings: PipelineSettings,
+    progress: bool = True,
+    on_stage: StageReport | None = None,
+    stages: Sequence[str] = STAGES,
+    ray: RayTarget = False,
+) -> None:
+    """Run (or skip, when finished earlier) the first ``stages`` of :data:`STAGES` in order into
+    ``out``, each one's wall time added to OUT/run.json (:func:`run_pipeline` runs them all; a
+    reproduction on a cluster runs the stages before learning in a task of their own). ``ray``: the
+    alignment's samples and the selection's candidates on a Ray cluster (:data:`~toolimit.distributed.RayTarget`)."""
+    report = on_stage or (lambda stage, line: None)
+    alignment, trajectory, learning = (out / stage for stage in STAGES)
+    finished = {
+        "alignment": alignment_finished(alignment),
+        "trajectory": (trajectory / TRAJECTORY_NPZ).is_file(),
+        "learning": learning_finished(learning),
+    }
+    for stage in stages:
+        if finished[stage]:
+            _check_same_run(out / stage, {"tool": tool, "world": world, "robot": robot})
+            report(stage, f"done earlier: {out / stage}")
+            continue
+        report(stage, "started")
+        if stage == "alignment":
+            result = _timed(
+                out, stage, lambda: align_stage(demo, tool, world, alignment, settings.align, progress, ray)
+            )
+            lines = describe_alignment(result)
+        elif stage == "trajectory":
+            made = _timed(
+                out, stage, lambda: trajopt_stage(alignment, robot, trajectory, settings.trajopt, progress, tool, ray)
+            )
+            lines = describe_trajectory(made)
+        else:
+            outcome = _timed(
+                out, stage, lambda: learn_stage(alignment, trajectory, learning, settings.learning, progress)
+            )
+            record = outcome.record
+            stopped = (record.get("early_stop") or {}).get("stopped_at_ppo_env_steps")
+            lines = [
+                f"{record['env_steps']} env steps ({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s"
+                + ("" if stopped is None else ", stopped early: learnt")
+            ]
+        for line in lines:
+            report(stage, line)
+
+
+def _timed(out: Path, stage: str, work: Callable[[], Any]) -> Any:
+    """``work()``, its wall time added to ``stage``'s in OUT/run.json (also when it raises)."""
+    started = time.perf_counter()
+    try:
+        return work()
+    finally:
+        times = _stage_times(out)
+        times[stage] = times.get(stage, 0.0) + time.perf_counter() - started
+        save_json(out / RUN_JSON, {"stage_times_s": times})
 
 
 def _check_same_run(folder: Path, expected: dict[str, str]) -> None:

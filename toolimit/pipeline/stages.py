@@ -26,6 +26,7 @@ from toolimit.align.outputs import ALIGNMENT_JSON, CHECKPOINT_JSON, write_alignm
 from toolimit.align.search import AlignmentResult, align
 from toolimit.artifacts import save_json
 from toolimit.demos import ToolDemo, load_demo
+from toolimit.distributed import RayTarget
 from toolimit.errors import InputError, StageFoundNothing
 from toolimit.learn.evaluate import Evaluation, evaluate, save_rollout_trajectory
 from toolimit.learn.task import LearningTask, task_from_pipeline
@@ -56,10 +57,12 @@ def align_stage(
     out: str | Path,
     settings: AlignSettings = AlignSettings(),
     progress: bool = True,
+    ray: RayTarget = False,
 ) -> AlignmentResult:
     """Stage ii: align ``tool``'s scene in ``world`` to ``demo`` (a ToolDemo or a demonstration
     file) and write ``out``. An interrupted search saves ``out/alignment_checkpoint.json`` and the
-    same call resumes it (:class:`~toolimit.align.search.SearchInterrupted`). InputError for a
+    same call resumes it (:class:`~toolimit.align.search.SearchInterrupted`). ``ray``: the samples
+    on a Ray cluster (:data:`~toolimit.distributed.RayTarget`), same result. InputError for a
     demonstration of another tool; StageFoundNothing when no sample earned a reward (the record is
     written, with no candidate)."""
     out = Path(out)
@@ -77,6 +80,7 @@ def align_stage(
         progress=progress,
         checkpoint=out / CHECKPOINT_JSON,
         clean=settings.clean,
+        ray=ray,
     )
     write_alignment(result, out, source, cleaned=settings.clean, workers=workers)
     if result.best is None:
@@ -131,11 +135,13 @@ def trajopt_stage(
     settings: TrajoptSettings = TrajoptSettings(),
     progress: bool = True,
     tool: str | None = None,
+    ray: RayTarget = False,
 ) -> TrajectoryStage:
     """Stage iii from an alignment folder: with ``settings.select_by_robot``, every candidate is
     tracked by ``robot`` and replayed in its scene, and the one whose replay earns most is kept
     (``out/selection.json`` lists them all); otherwise the best tool-only candidate is tracked.
-    Writes ``out/trajectory.npz``/``.json``, which record the candidate. InputError when ``tool``
+    Writes ``out/trajectory.npz``/``.json``, which record the candidate. ``ray``: the candidates
+    tracked on a Ray cluster (:data:`~toolimit.distributed.RayTarget`). InputError when ``tool``
     is given and the alignment is another tool's; StageFoundNothing when no robot replay earns a
     reward."""
     out = Path(out)
@@ -155,6 +161,7 @@ def trajopt_stage(
             progress=progress,
             time_scales=settings.time_scales,
             workers=worker_count(settings.workers),
+            ray=ray,
         )
         save_json(out / SELECTION_JSON, selection.record(candidates))
         if selection.best is None:

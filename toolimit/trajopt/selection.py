@@ -22,6 +22,7 @@ sand, so the pipeline selects at real time (measurements at
 
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
 from dataclasses import dataclass, replace
@@ -30,8 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from toolimit.artifacts import load_npz
+from toolimit.distributed import RayTarget, ray_cluster
 from toolimit.errors import BaseInsideFootprint, InputError
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 from toolimit.robots.model import RobotModel
 from toolimit.scenes.base import SceneParams, unpack_scene_params
 from toolimit.scenes.registry import make_scene
@@ -160,6 +162,7 @@ def select_by_robot_execution(
     progress: bool = True,
     time_scales: tuple[float, ...] | None = None,
     workers: int = 1,
+    ray: RayTarget = False,
 ) -> RobotSelection:
     """Track every candidate (:func:`~toolimit.trajopt.track.track`), replay the robot in its scene
     ``replays`` times and pick the candidate with the highest mean robot reward.
@@ -168,7 +171,8 @@ def select_by_robot_execution(
     how one is kept); None tracks at ``options.time_scale`` only. Candidate k's tracking and
     replays draw from ``default_rng([seed, k])``, its scales in ascending order; its base guesses
     avoid the scene's element footprints. ``workers`` processes track candidates side by side
-    (:mod:`toolimit.workers`); the selection does not depend on their number. Each kept trajectory
+    (:mod:`toolimit.workers`), or with ``ray`` one actor per CPU of a Ray cluster
+    (:data:`~toolimit.distributed.RayTarget`); the selection does not depend on it. Each kept trajectory
     records its candidate (``TrajectoryResult.scene``); an upside-down tracking is warned
     (:class:`~toolimit.trajopt.result.UpsideDownTracking`) for the selected candidate only.
     """
@@ -186,13 +190,20 @@ def select_by_robot_execution(
     arguments = (
         (robot, candidate, k, tool, world, options, seed, replays, scales) for k, candidate in enumerate(candidates)
     )
-    with tqdm(total=len(candidates), desc="robot execution", unit="candidate", disable=not progress) as bar:
-        for kept, refusal, rewards_by_scale in ordered_results(_execute_candidate, arguments, workers):
-            trajectories.append(None if kept is None else kept[1])
-            rewards.append(float("nan") if kept is None else kept[0])
-            refusals.append(refusal if kept is None else None)
-            by_scale.append(rewards_by_scale)
-            bar.update()
+    with ray_cluster(ray) if ray else contextlib.nullcontext() as cluster:
+        where = "" if cluster is None else f" on {cluster.summary()}"
+        bar = progress_bar(
+            total=len(candidates), desc=f"robot execution{where}", unit="candidate", disable=not progress
+        )
+        with bar:
+            for kept, refusal, rewards_by_scale in ordered_results(
+                _execute_candidate, arguments, workers, on_ray=cluster is not None
+            ):
+                trajectories.append(None if kept is None else kept[1])
+                rewards.append(float("nan") if kept is None else kept[0])
+                refusals.append(refusal if kept is None else None)
+                by_scale.append(rewards_by_scale)
+                bar.update()
     robot_rewards = np.array(rewards)
     ranked = [k for k in range(len(candidates)) if robot_rewards[k] > 0]
     costs = [float("nan") if trajectory is None else trajectory.cost for trajectory in trajectories]

@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from toolimit.errors import BaseInsideFootprint, InvalidSetting
-from toolimit.progress import tqdm
+from toolimit.progress import progress_bar
 from toolimit.robots import RobotModel
 from toolimit.tools import wrap_angle
 from toolimit.trajopt.initial_guess import ik_rollout
@@ -62,7 +62,7 @@ class TrackOptions:
             of an already converged run stops there (same basin; saves time); 0 disables it.
         initialisations: joint initialisations run from every base guess, among ``"hold"``
             (q_start held) and ``"rollout"`` (greedy differential IK); see the module docstring.
-        progress: show a tqdm bar over the starts.
+        progress: show a progress bar over the starts.
     """
 
     weights: TrackingWeights = TrackingWeights()
@@ -171,7 +171,7 @@ def track(
     merged = 0
     start_costs: list[float | None] = []  # per (variant, initialisation, start); None: in a footprint
     total = len(variants) * len(options.initialisations) * len(guesses)
-    with tqdm(total=total, desc=f"trajopt {robot.name}", disable=not options.progress) as bar:
+    with progress_bar(total=total, desc=f"trajopt {robot.name}", disable=not options.progress) as bar:
         for variant_index, variant in enumerate(variants):
             problem = TrackingProblem(robot, variant, dt, options.q_start, options.weights)
             finished: list[SqpOutcome] = []

@@ -1,0 +1,120 @@
+"""Early stopping: checks on their own seeds, a stop on an update boundary, the same updates as a
+run without it, and a stopped run that stays stopped."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+import numpy as np
+import pytest
+import torch
+
+from toolimit.errors import InvalidLearningConfig
+from toolimit.learn.early_stop import CHECK_GOAL, CHECK_SUCCESS, CHECK_TRAINING, EarlyStop, StopRule
+from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
+
+#: A clone good enough to succeed from the first update on the shipped planar spade.
+CLONED = LearningConfig(
+    timesteps=0,
+    envs=2,
+    preset="toolimit",
+    clone_rollouts=4,
+    clone_noise=0.3,
+    clone_steps=500,
+    value_steps=20,
+    checkpoint_every=1,
+    seed=0,
+    stop=StopRule(every=1, episodes=4, training_success=0.0, held=2),
+)
+
+
+def _parameters(model):
+    return torch.cat([p.detach().flatten() for p in model.policy.parameters()]).numpy()
+
+
+def _curve(folder):
+    return [json.loads(line) for line in (folder / CURVE_JSONL).read_text().splitlines()]
+
+
+def _config(**changes):
+    return LearningConfig(**{**CLONED.__dict__, **changes})
+
+
+def test_a_policy_that_has_learnt_stops_on_an_update_boundary(spade_task, tmp_path):
+    per_update = spade_task.horizon * 2  # 1 episode per update (toolimit preset) x 2 envs
+    stopped = learn_policy(spade_task, tmp_path / "stopped", _config(timesteps=6 * per_update), progress=False)
+    record = stopped.record
+    assert record["early_stop"]["stopped_at_ppo_env_steps"] == 2 * per_update == record["ppo_env_steps"]
+    assert record["early_stop"]["rule"] == {
+        "every": 1,
+        "episodes": 4,
+        "success": 1.0,
+        "training_success": 0.0,
+        "held": 2,
+    }
+    curve = _curve(tmp_path / "stopped")
+    assert [line["env_steps"] for line in curve] == [per_update, 2 * per_update]
+    assert [line[CHECK_SUCCESS] for line in curve] == [1.0, 1.0] and all(line[CHECK_GOAL] > 0 for line in curve)
+    assert [line[CHECK_TRAINING] for line in curve] == [line["success_rate"] for line in curve]
+    # the same two updates as a run of two updates without early stopping: checks draw nothing
+    fixed = learn_policy(
+        spade_task, tmp_path / "fixed", _config(timesteps=2 * per_update, early_stop=False), progress=False
+    )
+    assert "early_stop" not in fixed.record
+    np.testing.assert_allclose(_parameters(stopped.model), _parameters(fixed.model), rtol=0, atol=1e-6)
+    for with_checks, without in zip(curve, _curve(tmp_path / "fixed"), strict=True):
+        assert {k: v for k, v in with_checks.items() if not k.startswith("check_")} == pytest.approx(without)
+    # run again, it stays stopped: no step more, no line more
+    again = learn_policy(spade_task, tmp_path / "stopped", _config(timesteps=6 * per_update), progress=False)
+    assert again.record["resumed"] and again.record["ppo_env_steps"] == 2 * per_update
+    assert _curve(tmp_path / "stopped") == curve
+
+
+def test_a_check_passes_only_with_the_training_episodes_succeeding_too(spade_task):
+    """Checks read back from a curve: a mean that succeeds while the training episodes fail is no pass."""
+    rule = StopRule(every=1, episodes=2, training_success=0.8, held=2)
+
+    def line(steps, check, training):
+        return {"env_steps": steps, "success_rate": training, CHECK_SUCCESS: check, CHECK_TRAINING: training}
+
+    def stop(curve):
+        return EarlyStop(spade_task, rule, curve)
+
+    assert stop([line(10, 1.0, 0.5), line(20, 1.0, 0.9)]).stopped_at is None  # one pass in a row
+    assert stop([line(10, 1.0, 0.9), line(20, 1.0, 0.9)]).stopped_at == 20
+    assert stop([line(10, 1.0, 0.9), line(20, 0.95, 1.0)]).stopped_at is None
+    assert stop([line(10, 1.0, 0.9), line(20, 0.95, 1.0), line(30, 1.0, 0.8), line(40, 1.0, 0.85)]).stopped_at == 40
+
+
+def test_a_rule_never_met_spends_the_whole_budget(spade_task, tmp_path):
+    per_update = spade_task.horizon * 2
+    config = _config(timesteps=3 * per_update, clone_steps=20, stop=StopRule(every=2, episodes=2, held=1))
+    outcome = learn_policy(spade_task, tmp_path, config, progress=False)
+    assert outcome.record["early_stop"]["stopped_at_ppo_env_steps"] is None
+    assert outcome.record["ppo_env_steps"] == 3 * per_update
+    checked = [line["env_steps"] for line in _curve(tmp_path) if CHECK_SUCCESS in line]
+    assert checked == [2 * per_update]  # every second update
+
+
+@pytest.mark.parametrize(
+    ("changes", "field"),
+    [
+        ({"every": 0}, "stop_every"),
+        ({"episodes": 0}, "stop_episodes"),
+        ({"held": 1.5}, "stop_held"),
+        ({"success": 0.0}, "stop_success"),
+        ({"success": 1.2}, "stop_success"),
+    ],
+)
+def test_a_rule_no_run_can_use_is_refused(changes, field):
+    with pytest.raises(InvalidLearningConfig) as error:
+        StopRule(**changes)
+    assert error.value.field == field
+
+
+def test_a_config_rebuilt_from_its_record_has_its_rule():
+    config = LearningConfig(stop=StopRule(every=3))
+    assert LearningConfig(**asdict(config)) == config  # as notebooks and learning.json hand it back
+    with pytest.raises(InvalidLearningConfig):
+        LearningConfig(stop=3)
