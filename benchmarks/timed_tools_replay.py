@@ -31,9 +31,9 @@ from toolimit.trajopt.execution import resample_joints
 DEMOS = [f"data/demos/{tool}_{i:02d}.npz" for tool in ("hammer", "scythe") for i in range(5)]
 
 
-def measure(demo: str, out: Path, samples: int, candidates: int, starts: int, robot: str) -> dict:
+def measure(demo: str, out: Path, config: AlignmentConfig, starts: int, robot: str) -> dict:
     """One demonstration's tool-alone and robot replay rewards (None where a stage found nothing)."""
-    tool = Path(demo).stem.split("_")[0]
+    tool = Path(demo).stem.split("_")[0]  # hammer_00, scythe_03, hammer_video1_aligned
     started = time.perf_counter()
     row: dict = {"demo": demo, "tool_alone": None, "robot": None}
     try:
@@ -42,7 +42,7 @@ def measure(demo: str, out: Path, samples: int, candidates: int, starts: int, ro
             tool,
             "3d",
             out / "alignment",
-            AlignSettings(search=AlignmentConfig(samples=samples, candidates=candidates), workers=1),
+            AlignSettings(search=config, workers=1),
             progress=False,
         )
     except StageFoundNothing:
@@ -100,12 +100,14 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=3000)
     parser.add_argument("--candidates", type=int, default=5)
     parser.add_argument("--starts", type=int, default=2)
+    parser.add_argument("--z-offset-std", type=float, default=AlignmentConfig.z_offset_std)
     parser.add_argument("--robot", default="panda")
     parser.add_argument("--demos", nargs="*", default=DEMOS)
     args = parser.parse_args()
     rows = []
     for demo in args.demos:
-        row = measure(demo, Path(args.out) / Path(demo).stem, args.samples, args.candidates, args.starts, args.robot)
+        config = AlignmentConfig(samples=args.samples, candidates=args.candidates, z_offset_std=args.z_offset_std)
+        row = measure(demo, Path(args.out) / Path(demo).stem, config, args.starts, args.robot)
         print(json.dumps(row), flush=True)
         rows.append(row)
     if args.json:
