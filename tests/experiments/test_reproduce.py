@@ -177,7 +177,14 @@ def test_the_full_preset_measures_every_method_with_the_panda_and_the_pipeline_w
     experiments = preset("full").experiments
     panda = [e for e in experiments if e.robot == "panda"]
     assert {e.tool for e in panda} == {"spade", "hammer", "scythe"}
-    assert sum(e.tool == "spade" for e in panda) == 6 and all(e.methods == METHODS for e in panda)
+    assert sum(e.tool == "spade" for e in panda) == 6
+    assert all(e.methods == METHODS for e in panda if e.tool == "spade")
+    for tool, demos in (("hammer", 6), ("scythe", 5)):  # five shipped demos, and the hammer's real recording
+        timed = [e for e in panda if e.tool == tool]
+        assert len(timed) == demos and len({e.demo for e in timed}) == demos
+        assert [e.methods == METHODS for e in timed] == [e.demo.stem == f"{tool}_00" for e in timed]
+        assert all(e.methods == ("tool_only", "trajopt", "final") for e in timed if e.demo.stem != f"{tool}_00")
+    assert any(e.demo.name == "hammer_video1_aligned.npz" for e in panda)
     others = {e.robot: e.methods for e in experiments if e.robot != "panda"}
     assert others == {"ur5": ("tool_only", "trajopt", "final"), "talos": ("tool_only", "trajopt", "final")}
 

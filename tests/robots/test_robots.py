@@ -50,14 +50,35 @@ def test_panda_limits_match_the_benchmark_problem():
     np.testing.assert_allclose(panda.q_neutral, [0, -0.785398, 0, -2.35619, 0, 1.5707, 0.785398], atol=1e-5)
 
 
-def test_talos_is_torso_and_right_arm_on_its_legs():
+def test_talos_is_torso_right_arm_and_tool_roll_as_the_authors_built_it():
     talos = make_robot("talos")
-    assert talos.joint_names == ("torso_1_joint", "torso_2_joint") + tuple(f"arm_right_{i}_joint" for i in range(1, 8))
-    # the scene at knee height (the paper): pelvis 1.019 m above the soles, knee 0.400 m
-    assert talos.base_height == pytest.approx(1.019 - 0.400, abs=0.01)
+    arm = ("torso_1_joint", "torso_2_joint") + tuple(f"arm_right_{i}_joint" for i in range(1, 8))
+    assert talos.joint_names == arm + ("tool_roll_joint",)
+    np.testing.assert_allclose([talos.lower[-1], talos.upper[-1], talos.velocity_limit[-1]], [-6.14, 6.14, 2.61])
+    # the pelvis 0.3 m above the scene's floor (the authors' get_default_robot_z)
+    assert talos.base_height == pytest.approx(0.3)
     # the locked left arm and head do not move the tool; the right hand is on the right (-y)
-    position, _ = talos.tool_pose(talos.q_neutral, np.zeros(3))
+    position, rotation = talos.tool_pose(talos.q_neutral, np.zeros(3))
     assert position[1] < -0.2
+    # the tool roll turns the tool about its own axis: the head stays, the axis stays, x turns
+    rolled = talos.q_neutral.copy()
+    rolled[-1] = 1.0
+    rolled_position, rolled_rotation = talos.tool_pose(rolled, np.zeros(3))
+    np.testing.assert_allclose(rolled_position, position, atol=1e-12)
+    np.testing.assert_allclose(rolled_rotation[:, 2], rotation[:, 2], atol=1e-12)
+    assert rolled_rotation[:, 0] @ rotation[:, 0] == pytest.approx(np.cos(1.0))
+
+
+def test_talos_without_the_tool_roll_is_the_gripper_held_tool():
+    fixed, rolled = arms.talos(tool_roll=False), arms.talos()
+    assert fixed.model.nq == rolled.model.nq - 1 == 9
+    assert fixed.flange_frame == "gripper_right_base_link"
+    data_fixed, data_rolled = fixed.model.createData(), rolled.model.createData()
+    pin.framesForwardKinematics(fixed.model, data_fixed, fixed.q_neutral)
+    pin.framesForwardKinematics(rolled.model, data_rolled, np.append(fixed.q_neutral, 0.0))
+    gripper = data_fixed.oMf[fixed.model.getFrameId(fixed.flange_frame)]
+    flange = data_rolled.oMf[rolled.model.getFrameId(rolled.flange_frame)]
+    assert gripper.isApprox(flange, 1e-12)  # at roll 0 the flange is the gripper
 
 
 def test_tool_head_is_tool_length_from_the_flange_along_the_approach_axis(robot):

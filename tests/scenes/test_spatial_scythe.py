@@ -1,4 +1,5 @@
-"""Cutting model of the 3D scythe world: speed and height thresholds, swept tests, determinism."""
+"""Cutting model of the 3D scythe world (the authors' rule): distance, height, normal angle and
+approach thresholds, the authors' size, determinism, the success window."""
 
 from __future__ import annotations
 
@@ -7,125 +8,121 @@ import pytest
 
 from toolimit.scenes.base import InvalidSceneParameters, Scene
 from toolimit.scenes.registry import make_scene
-from toolimit.scenes.spatial.scythe import SpatialScytheScene, edge_crossings
-from toolimit.scenes.spatial.sweep import straight_sweep as sweep
-from toolimit.tools import ToolPose, rotation_z
+from toolimit.scenes.scythe_cut import scythe_cut_rule
+from toolimit.scenes.spatial.scythe import SpatialScytheScene
+from toolimit.scenes.spatial.sweep import LEVEL, pull, scripted_sweep
+from toolimit.tools import ToolPose, rotation_z, tool_spec
 
 PATCH = np.array([1.0, -0.5, 0.0])
-#: Blade along world x, cutting direction (tool +y) along world +y, snath straight up.
-LEVEL = np.eye(3)
 
 
-def fresh(batch_size=4, seed=0, yaw=0.0, **kwargs):
+def fresh(batch_size=4, seed=0, **kwargs):
     scene = SpatialScytheScene(**kwargs)
-    scene.reset({"grass_position": PATCH, "grass_yaw": yaw}, np.random.default_rng(seed), batch_size=batch_size)
+    scene.reset({"grass_position": PATCH}, np.random.default_rng(seed), batch_size=batch_size)
     return scene
 
 
-def straight_sweep(scene, speed, height, direction=1.0):
-    """Sweep the level blade across the patch along +-y at ``speed`` (m/s), ``height`` (m) up."""
-    for position, rotation in zip(*sweep(PATCH, 0.0, speed, height, scene.control_dt, direction)):
+def run(scene, poses):
+    for position, rotation in zip(poses.position, poses.rotation):
         scene.step(ToolPose(position, rotation))
 
 
-def arc_sweep(scene, angular_speed, height, inner_radius=0.3):
-    """Swing the level blade counterclockwise about a vertical axis beside the patch (rad/s).
-
-    The edge lies along the radius, from ``inner_radius`` to ``inner_radius + blade_length`` from
-    the pivot, and moves along tool +y (the cutting direction); returns the pivot (3,).
-    """
-    pivot = PATCH - np.array([inner_radius + scene.blade_length / 2, 0.0, 0.0])
-    for angle in np.arange(-1.2, 1.2, angular_speed * scene.control_dt):
-        turn = rotation_z(angle)
-        scene.step(ToolPose(pivot + turn @ np.array([inner_radius, 0.0, height]), turn))
-    return pivot
+def pull_across(scene, speed, height=0.05, x=PATCH[0], rotation=LEVEL, towards_handle=True):
+    """The level edge (centred at ``x``) pulled across the patch along -y (towards the handle) at
+    ``speed`` m/s, or pushed along +y; the poses' rotation may be replaced (same head path)."""
+    start, end = PATCH[1] + 0.15, PATCH[1] - 0.15
+    if not towards_handle:
+        start, end = end, start
+    poses = pull(np.array([x, 0.0, height]), start, end, speed, scene.control_dt)
+    run(scene, ToolPose(poses.position, np.repeat(rotation[None], len(poses.position), axis=0)))
 
 
-def test_registry_and_protocol():
+def test_registry_protocol_and_the_authors_size():
     scene = make_scene("scythe", "3d")
     assert isinstance(scene, Scene)
-    assert [p.name for p in scene.parameters] == ["grass_position", "grass_yaw"]
+    assert [p.name for p in scene.parameters] == ["grass_position"]  # no yaw: the authors' has none
+    assert (scene.n_stalks, scene.patch_size, scene.stalk_height, scene.stalk_width) == (10, (0.4, 0.1), 0.3, 0.005)
+    spec = tool_spec("scythe")
+    assert (spec.head_width, spec.length) == (0.35, 0.68)  # blade 0.35 m; snath 0.70 m less half the blade
+    np.testing.assert_allclose(scene.edge, [[0.02, 0.0, 0.02], [0.37, 0.0, 0.02]])
 
 
-@pytest.mark.parametrize("speed", [1.5, 4.0])
-def test_fast_low_sweep_cuts_all_stalks(speed):
-    scene = fresh()
-    straight_sweep(scene, speed, height=0.05)
+def test_scripted_pulls_cut_every_stalk_within_the_first_second():
+    scene = fresh(batch_size=20)
+    run(scene, scripted_sweep({"grass_position": PATCH}))
     np.testing.assert_array_equal(scene.goal_reward(), scene.n_stalks)
     assert scene.is_success().all()
+    assert np.all(scene.cut_time < 1.0)
 
 
-@pytest.mark.parametrize("angular_speed", [6.0, 2.5])
-def test_arc_swing_cuts_where_the_edge_passes_fast_enough(angular_speed):
-    """Stalks between the edge's radii are cut where the edge point's speed (omega r) > v_min."""
-    scene = fresh(batch_size=2)
-    inner = 0.3
-    pivot = arc_sweep(scene, angular_speed, height=0.04, inner_radius=inner)
-    radius = np.linalg.norm(scene.stalks_xy - pivot[:2], axis=-1)
-    slowest = max(inner, scene.min_cut_speed / angular_speed)  # below this radius the edge is too slow
-    expected = (radius > slowest) & (radius < inner + scene.blade_length)
-    clear = (np.abs(radius - slowest) > 0.003) & (np.abs(radius - inner - scene.blade_length) > 0.003)
-    np.testing.assert_array_equal(scene.cut[clear], expected[clear])
-    if angular_speed < 3.0:  # the slow swing cuts only the outer stalks
-        assert expected.any() and not expected.all()
-    else:
-        assert expected.all()
-
-
-def test_sweep_below_min_speed_cuts_nothing():
+@pytest.mark.parametrize("speed", [1.6, 2.4])
+def test_a_fast_pull_cuts_the_stalks_under_the_edge(speed):
+    """Stalks across the 0.35 m edge's span (the edge centred on the patch) are cut, none more than
+    1 cm beyond its ends (there the direction to the stalk is more than 30 degrees off the normal
+    wherever the stalk is within 2 cm)."""
     scene = fresh()
-    straight_sweep(scene, 0.8 * scene.min_cut_speed, height=0.05)
+    pull_across(scene, speed)
+    beyond = np.abs(scene.stalks_xy[..., 0] - PATCH[0]) - 0.175  # m beyond the nearer end
+    assert np.all(scene.cut[beyond < 0.0]) and not np.any(scene.cut[beyond > 0.0101])
+    assert (beyond < 0.0).sum() >= 30
+
+
+def test_a_pull_below_about_one_metre_per_second_cuts_nothing():
+    """The approach (velocity . offset, 0.02 m^2/s) needs > 1 m/s at the 2 cm limit."""
+    scene = fresh()
+    pull_across(scene, 0.9)
     assert scene.goal_reward().sum() == 0
 
 
-def test_sweep_above_max_height_cuts_nothing():
+def test_pushing_away_from_the_handle_cuts_nothing():
     scene = fresh()
-    straight_sweep(scene, 3.0, height=scene.max_cut_height + 0.01)
+    pull_across(scene, 3.0, towards_handle=False)
     assert scene.goal_reward().sum() == 0
 
 
-def test_backward_sweep_cuts_nothing():
+def test_an_edge_above_the_cutting_height_cuts_nothing():
     scene = fresh()
-    straight_sweep(scene, 3.0, height=0.05, direction=-1.0)
+    pull_across(scene, 3.0, height=scene.max_cut_height + 0.01)
     assert scene.goal_reward().sum() == 0
 
 
-def test_no_tunnelling_at_4_m_per_s_with_one_substep():
-    scene = fresh(substeps=1)
-    straight_sweep(scene, 4.0, height=0.05)
-    np.testing.assert_array_equal(scene.goal_reward(), scene.n_stalks)
+@pytest.mark.parametrize(("snath_elevation_deg", "cuts"), [(20.0, True), (40.0, False)])
+def test_the_edge_normal_must_be_within_30_degrees_of_the_stalk(snath_elevation_deg, cuts):
+    """The normal is the snath's direction towards the handle: raise the snath (turn about the
+    blade, tool x) and beyond 30 degrees nothing is cut."""
+    angle = np.deg2rad(snath_elevation_deg)
+    turn = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(angle), -np.sin(angle)], [0.0, np.sin(angle), np.cos(angle)]])
+    scene = fresh()
+    pull_across(scene, 3.0, rotation=turn @ LEVEL)
+    assert (scene.goal_reward().sum() > 0) == cuts
 
 
-def test_edge_crossings_of_a_rotating_edge_are_exact():
-    """An edge turning a quarter turn about its root crosses a line at 45 degrees at f = 0.5."""
-    root = np.zeros((1, 3))
-    tip0, tip1 = np.array([[1.0, 0.0, 0.1]]), np.array([[0.0, 1.0, 0.1]])
-    stalk = np.array([[[0.5, 0.5]]])
-    fraction, along, height = edge_crossings(root, tip0, root, tip1, stalk)
-    valid = np.isfinite(fraction[0, 0])
-    assert valid.sum() == 1
-    assert fraction[0, 0][valid][0] == pytest.approx(0.5)
-    # the linearly moving tip passes (0.5, 0.5) exactly at mid-interval, end of the edge
-    assert along[0, 0][valid][0] == pytest.approx(1.0)
-    assert height[0, 0][valid][0] == pytest.approx(0.1)
+def test_the_rule_tests_the_distance_between_the_edge_and_the_stalk():
+    """One stalk, the edge held still then moved 1 cm/sub-step towards it: cut at 2 cm or closer."""
+    rule = scythe_cut_rule(0.005)
+    stalk = np.array([[[0.2, -0.0495]]])  # (B=1, N=1, 2), 2.95 cm beyond the edge's y at the start
+    # tool: head at the origin, level; the edge at y = -0.02 from the head
+    positions = np.array([[[0.0, -0.01 * s, 0.05]] for s in range(4)])  # (S+1=4, B=1, 3)
+    rotations = np.repeat(LEVEL[None, None], 4, axis=0)
+    cuts = rule.cuts(positions, rotations, stalk, dt=1.0 / 240)  # 2.4 m/s towards the stalk
+    # gaps after each sub-step: 1.95, 0.95, -0.05 cm (passed); approach 2.4 m/s * gap > 0.02 m^2/s
+    np.testing.assert_array_equal(cuts[:, 0, 0], [True, True, False])
 
 
-def test_stalks_lie_in_the_turned_patch_and_depend_on_the_seed():
-    yaw = 0.7
-    scene = fresh(yaw=yaw)
-    local = (scene.stalks_xy - PATCH[:2]) @ rotation_z(yaw)[:2, :2]
+def test_stalks_lie_in_the_patch_and_depend_on_the_seed():
+    scene = fresh()
     half = np.array(scene.patch_size) / 2
-    assert np.all(np.abs(local) <= half + 1e-12)
+    assert np.all(np.abs(scene.stalks_xy - PATCH[:2]) <= half + 1e-12)
     assert not np.allclose(scene.stalks_xy[0], scene.stalks_xy[1])  # instances differ
-    np.testing.assert_array_equal(fresh(yaw=yaw).stalks_xy, scene.stalks_xy)  # same seed, same grass
-    assert not np.allclose(fresh(yaw=yaw, seed=1).stalks_xy, scene.stalks_xy)
+    np.testing.assert_array_equal(fresh().stalks_xy, scene.stalks_xy)  # same seed, same grass
+    assert not np.allclose(fresh(seed=1).stalks_xy, scene.stalks_xy)
 
 
 def test_same_seed_same_rewards():
     results = []
     for _ in range(2):
-        scene = fresh(batch_size=3, yaw=0.4)
-        arc_sweep(scene, angular_speed=-5.0, height=0.05)
+        scene = fresh(batch_size=3)
+        pull_across(scene, 1.3, x=PATCH[0] + 0.03)
         results.append((scene.goal_reward(), scene.dense_reward(), scene.is_success()))
     for a, b in zip(*results):
         np.testing.assert_array_equal(a, b)
@@ -150,29 +147,43 @@ def test_dense_reward_grows_as_the_blade_root_approaches_the_stalks():
 
 def test_invalid_parameters_are_rejected_with_a_reason():
     scene = SpatialScytheScene()
-    good = {"grass_position": PATCH, "grass_yaw": 0.0}
+    good = {"grass_position": PATCH}
     assert scene.invalid_reason(good) is None
-    assert "ground" in scene.invalid_reason({**good, "grass_position": PATCH + [0, 0, 0.1]})
-    assert "grass_yaw" in scene.invalid_reason({**good, "grass_yaw": 4.0})
-    assert "missing" in scene.invalid_reason({"grass_position": PATCH})
+    assert "ground" in scene.invalid_reason({"grass_position": PATCH + [0, 0, 0.1]})
+    assert "missing" in scene.invalid_reason({})
     with pytest.raises(InvalidSceneParameters):
-        scene.reset({**good, "grass_position": np.array([9.0, 0.0, 0.0])}, np.random.default_rng(0))
+        scene.reset({"grass_position": np.array([9.0, 0.0, 0.0])}, np.random.default_rng(0))
 
 
 def test_footprint_and_snapshot():
-    scene = fresh(yaw=0.3)
-    np.testing.assert_allclose(scene.footprints({"grass_position": PATCH, "grass_yaw": 0.3}), [[1.0, -0.5, 0.2, 0.15, 0.3]])
-    straight_sweep(scene, 3.0, height=0.05)
+    scene = fresh()
+    np.testing.assert_allclose(scene.footprints({"grass_position": PATCH}), [[1.0, -0.5, 0.2, 0.05, 0.0]])
+    pull_across(scene, 3.0)
     snap = scene.snapshot()
     assert snap["stalk_base"].shape == (scene.n_stalks, 3)
     np.testing.assert_array_equal(snap["stalk_cut"], scene.cut[0])
-    np.testing.assert_allclose(snap["blade"][1] - snap["blade"][0], [scene.blade_length, 0.0, 0.0])
+    np.testing.assert_allclose(snap["blade"][1] - snap["blade"][0], [0.35, 0.0, 0.0], atol=1e-12)
 
 
 def test_mowing_after_the_window_is_not_a_success():
     scene = fresh(batch_size=1)
-    for _ in range(30):  # wait 1.25 s beside the patch before sweeping
-        scene.step(ToolPose(PATCH + [-0.2, -0.4, 0.05], LEVEL))
-    straight_sweep(scene, 3.0, height=0.05)
+    for _ in range(30):  # wait 1.25 s beside the patch before pulling
+        scene.step(ToolPose(PATCH + [-0.2, 0.4, 0.05], LEVEL))
+    run(scene, scripted_sweep({"grass_position": PATCH}))
     assert scene.goal_reward()[0] == scene.n_stalks
     assert not scene.is_success()[0]
+
+
+def test_a_turned_scythe_cuts_along_its_own_snath():
+    """The rule does not depend on the world's axes: the pull and the patch turned together about
+    the patch centre cut the same stalks (the stalks turned with them)."""
+    straight = fresh(batch_size=1)
+    pull_across(straight, 2.5)
+    turn = rotation_z(0.8)
+    turned = fresh(batch_size=1)
+    turned.stalks_xy = PATCH[:2] + (turned.stalks_xy - PATCH[:2]) @ turn[:2, :2].T
+    start, end = PATCH[1] + 0.15, PATCH[1] - 0.15
+    poses = pull(np.array([PATCH[0], 0.0, 0.05]), start, end, 2.5, turned.control_dt)
+    positions = PATCH + (poses.position - PATCH) @ turn.T
+    run(turned, ToolPose(positions, turn[None] @ poses.rotation))
+    np.testing.assert_array_equal(turned.cut, straight.cut)

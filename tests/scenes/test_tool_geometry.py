@@ -90,9 +90,11 @@ def test_hammer_and_scythe_working_parts() -> None:
     assert 2 * head.half_extents[2] == pytest.approx(spec.head_length)
     blade = tool_boxes("scythe")[0]
     scythe = tool_spec("scythe")
-    assert blade.center[0] - blade.half_extents[0] == pytest.approx(0.0)
-    assert 2 * blade.half_extents[0] == pytest.approx(scythe.head_width)  # along +x from the head point
-    assert 2 * blade.half_extents[1] < 0.01  # thin
+    # the authors' blade: from the snath's side (2 cm) along +x, 4 cm along the snath, 1 cm thick
+    assert blade.center[0] - blade.half_extents[0] == pytest.approx(0.02)
+    assert 2 * blade.half_extents[0] == pytest.approx(scythe.head_width)
+    assert 2 * blade.half_extents[2] == pytest.approx(scythe.head_length)
+    assert 2 * blade.half_extents[1] == pytest.approx(0.01)
 
 
 def test_unknown_tool_is_a_clear_error() -> None:

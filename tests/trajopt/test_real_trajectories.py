@@ -13,10 +13,10 @@ from toolimit.trajopt.reachability import reachable_steps
 
 #: minimum share of targets reachable with the found base. Measured with this test's tiny budget
 #: (and the full default budget): panda 0.97 to 1.0 (1.0), ur5 1.0 (1.0), planar3 on the x-z
-#: projection 1.0 (1.0), talos with the scene at its knee height 0.68 to 0.85 (on the floor, as
-#: before the knee height: 0.40 to 0.57; with its legs fixed, the targets near the ground are out of
-#: its reach).
-MIN_REACHABLE_SHARE = {"planar3": 0.9, "panda": 0.95, "ur5": 0.95, "talos": 0.6}
+#: projection 1.0 (1.0), talos as the authors built it (pelvis 0.3 m above the scene, tool roll)
+#: 0.88 to 1.0 (at the knee height, 0.619 m: 0.68 to 0.85; on the floor: 0.40 to 0.57; with its
+#: legs fixed, the targets near the ground are out of its reach).
+MIN_REACHABLE_SHARE = {"planar3": 0.9, "panda": 0.95, "ur5": 0.95, "talos": 0.8}
 TINY = TrackOptions(starts=2, sqp=SqpOptions(max_iterations=5))
 
 

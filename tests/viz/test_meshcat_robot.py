@@ -104,7 +104,9 @@ def test_trajectory_html_animates_robot_tool_and_targets(tmp_path, html_commands
 def test_mesh_visual_model_locks_the_same_joints_as_the_robot():
     talos = make_robot("talos", tool="spade")
     geometry = visual_geometry(talos)
-    assert max(obj.parentJoint for obj in geometry.geometryObjects) == talos.model.njoints - 1
+    # every arm joint carries meshes; the authors' tool roll (added after the gripper) none
+    assert max(obj.parentJoint for obj in geometry.geometryObjects) == talos.model.getJointId("arm_right_7_joint")
+    assert talos.model.names[-1] == "tool_roll_joint"
     names = {obj.name.rsplit("_", 1)[0] for obj in geometry.geometryObjects}
     assert any(name.startswith("leg_left") for name in names)  # locked parts are still drawn
 

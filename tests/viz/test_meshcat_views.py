@@ -11,6 +11,7 @@ import pytest
 from toolimit.scenes.spatial.hammer import SpatialHammerScene
 from toolimit.scenes.spatial.scythe import SpatialScytheScene
 from toolimit.scenes.spatial.spade import SpatialSpadeScene
+from toolimit.scenes.spatial.sweep import pull
 from toolimit.tools import ToolPose, rotation_z, tool_poses
 from toolimit.viz.meshcat_views import (
     RobotVisual,
@@ -65,12 +66,12 @@ def test_hammer_replay_html_holds_the_scene_and_its_animation(tmp_path, html_com
 
 
 def test_scythe_replay_shows_cut_stalks_fallen(tmp_path, html_commands):
-    frames_poses = ToolPose(
-        np.column_stack([np.full(N_FRAMES, 0.78), np.linspace(-0.4, 0.3, N_FRAMES), np.full(N_FRAMES, 0.05)]),
-        np.broadcast_to(np.eye(3), (N_FRAMES, 3, 3)).copy(),
-    )
-    scene = SpatialScytheScene(n_stalks=20)
-    params = {"grass_position": np.array([1.0, 0.0, 0.0]), "grass_yaw": 0.0}
+    # the level scythe pulled towards its handle (-y) across the patch at 1.5 m/s, then still
+    pulled = pull(np.array([1.0, 0.0, 0.05]), 0.15, -0.15, 1.5, 1.0 / 24)
+    index = np.minimum(np.arange(N_FRAMES), len(pulled.position) - 1)
+    frames_poses = ToolPose(pulled.position[index], pulled.rotation[index])
+    scene = SpatialScytheScene(n_stalks=20, patch_size=(0.3, 0.1))
+    params = {"grass_position": np.array([1.0, 0.0, 0.0])}
     frames = replay_scene(scene, frames_poses, params, np.random.default_rng(1))
     assert frames[-1]["stalk_cut"].all() and not frames[0]["stalk_cut"].any()
     path = replay_to_html(tmp_path / "scythe.html", frames, "scythe")

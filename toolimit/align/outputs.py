@@ -73,16 +73,27 @@ def _candidate_record(candidate: Candidate) -> dict[str, Any]:
         "params": sample.pop("params"),
         "sample_index": candidate.index,
         "replay_rewards": candidate.replay_rewards.tolist(),
+        "episode_cut": None if candidate.cut is None else candidate.cut.record(),
         **sample,
     }
 
 
 def aligned_demo_arrays(result: AlignmentResult, candidate: Candidate) -> dict[str, Any]:
-    """The arrays of ``aligned_demo.npz`` for ``candidate``."""
-    aligned, roll, poses = result.aligned_motion(candidate)
+    """The arrays of ``aligned_demo.npz`` for ``candidate``: its episode (the cut motion of a timed
+    goal, :mod:`toolimit.align.episode_cut`, with the cut's frames; else the whole motion)."""
+    aligned, roll, _ = result.aligned_motion(candidate)
+    poses = result.episode_poses(candidate)
+    head, handle = aligned.head, aligned.handle
+    cut: dict[str, Any] = {}
+    if candidate.cut is not None:
+        head, handle, roll = candidate.cut.apply(head), candidate.cut.apply(handle), candidate.cut.apply(roll)
+        cut = {
+            "first_reward_frame": np.int64(candidate.cut.first_reward_frame),
+            "episode_start_frame": np.int64(candidate.cut.start),
+        }
     arrays: dict[str, Any] = {
-        "head": aligned.head,
-        "handle": aligned.handle,
+        "head": head,
+        "handle": handle,
         "fps": np.float64(aligned.fps),
         "tool": np.str_(result.tool),
         "tip_position": poses.position,
@@ -92,20 +103,40 @@ def aligned_demo_arrays(result: AlignmentResult, candidate: Candidate) -> dict[s
         "keypoints": result.keypoints,
         "reward": np.float64(candidate.reward),
     }
-    return arrays | pack_scene_params(candidate.sample.params)
+    return arrays | cut | pack_scene_params(candidate.sample.params)
 
 
 def candidates_arrays(result: AlignmentResult) -> dict[str, Any]:
-    """The arrays of ``candidates.npz``: every candidate's poses (K, T, ...) and parameters (K, ...)."""
-    motions = [result.aligned_motion(candidate)[2] for candidate in result.candidates]
+    """The arrays of ``candidates.npz``: every candidate's episode poses (K, T, ...), NaN after its
+    own ``episode_frames`` (K,) (the cut episodes of a timed goal differ in length), and parameters
+    (K, ...); for a timed goal also ``first_reward_frame`` and ``episode_start_frame`` (K,), frames
+    of the aligned motion."""
+    motions = [result.episode_poses(candidate) for candidate in result.candidates]
+    frames = np.array([len(poses.position) for poses in motions])
+
+    def padded(values: list[np.ndarray]) -> np.ndarray:
+        stacked = np.full((len(values), frames.max()) + values[0].shape[1:], np.nan)
+        for k, value in enumerate(values):
+            stacked[k, : len(value)] = value
+        return stacked
+
+    cuts = [candidate.cut for candidate in result.candidates]
+    cut_arrays: dict[str, Any] = {}
+    if all(cut is not None for cut in cuts):
+        cut_arrays = {
+            "first_reward_frame": np.array([cut.first_reward_frame for cut in cuts if cut is not None]),
+            "episode_start_frame": np.array([cut.start for cut in cuts if cut is not None]),
+        }
     arrays: dict[str, Any] = {
-        "tip_position": np.stack([poses.position for poses in motions]),
-        "tip_quaternion_wxyz": np.stack([continuous_quaternions_wxyz(poses.rotation) for poses in motions]),
+        "tip_position": padded([poses.position for poses in motions]),
+        "tip_quaternion_wxyz": padded([continuous_quaternions_wxyz(poses.rotation) for poses in motions]),
+        "episode_frames": frames,
         "fps": np.float64(result.demo.fps),
         "tool": np.str_(result.tool),
         "scene_world": np.str_(result.world),
         "alignment_reward": np.array([candidate.reward for candidate in result.candidates]),
         "sample_index": np.array([candidate.index for candidate in result.candidates]),
+        **cut_arrays,
     }
     names = result.candidates[0].sample.params
     stacked = {

@@ -21,6 +21,7 @@ import numpy as np
 
 from toolimit.align.checkpoint import checkpoint_key, load_checkpoint, save_checkpoint
 from toolimit.align.config import AlignmentConfig, demo_plane
+from toolimit.align.episode_cut import EpisodeCut, first_reward_cut, is_timed
 from toolimit.align.keypoints import velocity_keypoints
 from toolimit.align.sampler import (
     AlignmentSample,
@@ -55,12 +56,15 @@ class Candidate:
         reward: mean final goal reward over the replays.
         replay_rewards: (replays,) final goal reward of each replay.
         sample: the drawn scale, z offset, rolls and scene parameters.
+        cut: where the episode lies in the aligned motion, for a scene whose goal is timed
+            (:mod:`toolimit.align.episode_cut`); None otherwise (the whole motion).
     """
 
     index: int
     reward: float
     replay_rewards: np.ndarray
     sample: AlignmentSample
+    cut: EpisodeCut | None = None
 
 
 @dataclass(frozen=True)
@@ -135,8 +139,17 @@ class AlignmentResult:
         return max(self.candidates, key=lambda c: (c.reward, -c.index))
 
     def aligned_motion(self, candidate: Candidate) -> tuple[ToolDemo, np.ndarray, ToolPose]:
-        """The candidate's aligned demo, per-frame roll (T,) rad and tool poses in the world frame."""
+        """The candidate's aligned demo, per-frame roll (T,) rad and tool poses in the world frame:
+        the whole motion (see :meth:`episode_poses` for the episode the later stages use)."""
         return apply_alignment_sample(self.demo, self.keypoints, candidate.sample)
+
+    def episode_poses(self, candidate: Candidate) -> ToolPose:
+        """The tool poses of the candidate's episode, world frame: the aligned motion cut by the
+        authors' rule for a timed goal (``candidate.cut``), the whole of it otherwise."""
+        poses = self.aligned_motion(candidate)[2]
+        if candidate.cut is None:
+            return poses
+        return ToolPose(candidate.cut.apply(poses.position), candidate.cut.apply(poses.rotation))
 
     def replay_generator(self, candidate: Candidate, parameters: Sequence[ParameterSpec]) -> np.random.Generator:
         """The candidate's generator as the search left it after drawing the sample: a scene reset
@@ -223,11 +236,15 @@ class SampleEvaluator:
                 screened = replay(self.scene, sample.params, rng, poses, self.config.screen_replays)
                 if not np.any(screened != 0.0):
                     return Unrewarded(index, screened)
-            rewards = replay(self.scene, sample.params, rng, poses, self.config.replays)
+            trace: list[np.ndarray] = []  # (B,) goal rewards after each step, for a timed goal's cut
+            record = (lambda _, scene: trace.append(np.array(scene.goal_reward()))) if is_timed(self.scene) else None
+            rewards = replay(self.scene, sample.params, rng, poses, self.config.replays, on_step=record)
         except InvalidSceneParameters as error:
             return Rejected(index, str(error))
         reward = float(np.mean(rewards))
-        return Candidate(index, reward, rewards, sample) if reward != 0.0 else Unrewarded(index, rewards)
+        if reward == 0.0:
+            return Unrewarded(index, rewards)
+        return Candidate(index, reward, rewards, sample, first_reward_cut(np.array(trace)) if trace else None)
 
     def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
         return [self.evaluate(index) for index in range(start, stop)]
@@ -425,7 +442,14 @@ def _state(result: AlignmentResult) -> dict[str, Any]:
         "samples_to_first_candidate": result.samples_to_first_candidate,
         "rejection_reasons": result.rejection_reasons,
         "wall_time_s": result.wall_time_s,
-        "candidates": [{"index": c.index, "replay_rewards": c.replay_rewards.tolist()} for c in result.candidates],
+        "candidates": [
+            {
+                "index": c.index,
+                "replay_rewards": c.replay_rewards.tolist(),
+                "first_reward_frame": None if c.cut is None else c.cut.first_reward_frame,
+            }
+            for c in result.candidates
+        ],
     }
 
 
@@ -440,7 +464,9 @@ def _restore(result: AlignmentResult, state: dict[str, Any], evaluator: SampleEv
         sample = evaluator.draw(np.random.default_rng([result.seed, index]))
         assert sample is not None, f"checkpoint candidate {index} no longer draws a sample"
         rewards = np.asarray(saved["replay_rewards"], dtype=float)
-        result.candidates.append(Candidate(index, float(np.mean(rewards)), rewards, sample))
+        first = saved.get("first_reward_frame")
+        cut = None if first is None else EpisodeCut(int(first))
+        result.candidates.append(Candidate(index, float(np.mean(rewards)), rewards, sample, cut))
     return float(state["wall_time_s"])
 
 

@@ -292,6 +292,12 @@ def hammer_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
 
 
 # --- scythe ------------------------------------------------------------------------------------
+#: Head to hands of the demonstrator's scythe, m: a real scythe, longer than the simulated one
+#: (``tool_spec("scythe").length``, the authors' 0.68 m). The video shows the demonstrator's tool;
+#: alignment uses its head path and axis only, as the authors' does.
+DEMONSTRATOR_SCYTHE_LENGTH = 1.0
+
+
 def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
     """1-3 low sweeps from right to left around the body, stepping forward between sweeps.
 
@@ -299,7 +305,7 @@ def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
     ``theta`` (rad, from local +x, counter-clockwise) and ``radius`` (m) around the body's vertical
     axis through ``(pivot_x, pivot_y)``; the shaft rises at ``beta`` from the blade towards the hands.
     """
-    L = tool_spec("scythe").length
+    L = DEMONSTRATOR_SCYTHE_LENGTH
     deg = np.deg2rad
     radius = rng.uniform(0.65, 0.95)
     hand_radius = rng.uniform(0.05, 0.2)

@@ -17,9 +17,10 @@ rewritten after every experiment.
 Presets: ``quick`` (the planar spade, tiny budgets: a minute, for CI and a first look), ``planar``
 (the same experiment with the planar world's default settings: the paper's pattern in a quarter of
 an hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstrations and the
-authors' real recording, the hammer and the scythe on one demonstration each, every method; the
-UR5 and Talos with the spade on the real recording, the method's stages only; the 3D world's
-default settings). ``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
+authors' real recording, every method; with the hammer and the scythe on their five shipped
+demonstrations, every method on ``_00`` and the method's stages on the others, and the method's
+stages on the authors' real hammer recording; the UR5 and Talos with the spade on the real
+recording, the method's stages only; the 3D world's default settings). ``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
 reproduce`` process whose output goes to OUT/logs/<experiment>.log (the results do not depend on
 it: every experiment is seeded on its own).
 """
@@ -45,8 +46,9 @@ from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.pipeline.run import run_pipeline
 from toolimit.pipeline.settings import PipelineSettings
 
-#: Where ``full`` finds the authors' real spade recording: ``../shared`` beside the checkout.
+#: Where ``full`` finds the authors' real spade and hammer recordings: ``../shared`` beside the checkout.
 REAL_SPADE_RECORDING = Path("../shared/data/video_demos/spade_video1_aligned.npz")
+REAL_HAMMER_RECORDING = Path("../shared/data/video_demos/hammer_video1_aligned.npz")
 SHIPPED_DEMOS = Path("data/demos")
 PRESETS = ("quick", "planar", "full")
 
@@ -75,7 +77,14 @@ def preset(name: str) -> Preset:
         raise InputError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
     spades = [SHIPPED_DEMOS / f"spade_{k:02d}.npz" for k in range(5)] + [REAL_SPADE_RECORDING]
     experiments = [Experiment("spade", "3d", "panda", demo) for demo in spades]
-    experiments += [Experiment(tool, "3d", "panda", SHIPPED_DEMOS / f"{tool}_00.npz") for tool in ("hammer", "scythe")]
+    for tool in ("hammer", "scythe"):  # every method on _00, the method's stages on the others
+        experiments.append(Experiment(tool, "3d", "panda", SHIPPED_DEMOS / f"{tool}_00.npz"))
+        experiments += [
+            Experiment(tool, "3d", "panda", SHIPPED_DEMOS / f"{tool}_{k:02d}.npz", methods=PIPELINE_METHODS)
+            for k in range(1, 5)
+        ]
+        if tool == "hammer":
+            experiments.append(Experiment("hammer", "3d", "panda", REAL_HAMMER_RECORDING, methods=PIPELINE_METHODS))
     experiments += [
         Experiment("spade", "3d", robot, REAL_SPADE_RECORDING, methods=PIPELINE_METHODS) for robot in ("ur5", "talos")
     ]

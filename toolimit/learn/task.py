@@ -10,7 +10,9 @@ The horizon: the paper's success test asks for the goal to hold for half of the 
 least 10 spheres in the box for half of the steps), so an episode as long as the trajectory can
 fail although the motion delivers. :func:`success_horizon` replays the reference and holds its last
 configuration until the scene reports success, and the task keeps that step count (at most twice
-the trajectory).
+the trajectory). A timed goal (hammer, scythe: the goal within the first second) cannot come later
+by holding still: there the horizon is the trajectory's length, as the authors' (``train_ppo.py``:
+the cut episode of :mod:`toolimit.align.episode_cut`).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from toolimit.align.episode_cut import is_timed
 from toolimit.artifacts import load_npz, save_npz
 from toolimit.errors import InputError
 from toolimit.robots import RobotModel
@@ -137,8 +140,11 @@ def success_horizon(
     rng: np.random.Generator,
 ) -> int:
     """The episode length H in [T, 2T] steps: the reference replayed, then its last configuration
-    held, until the scene's success test holds (2T when it never does). See the module docstring."""
+    held, until the scene's success test holds (2T when it never does); T for a timed goal. See
+    the module docstring."""
     steps = len(reference_q) - 1
+    if is_timed(scene):
+        return steps
     held = np.concatenate([reference_q, np.repeat(reference_q[-1:], steps, axis=0)])
     positions, rotations = robot.tool_poses(held[1:], base)
     scene.reset(params, rng)

@@ -13,14 +13,16 @@ Mount frames (z = approach direction, along the held tool; see :mod:`toolimit.ro
   example-robot-data's q0 (fingers dropped). Base on the floor (base_height 0), as in PROBLEM.md.
 * ``ur5``: example-robot-data's UR5. Flange ``tool0``, approach = its z axis. Rest pose
   (0, -1.57, 1.57, -1.57, -1.57, 0) (elbow up, wrist pointing down). Base on a 0.4 m pedestal.
-* ``talos``: example-robot-data's full Talos reduced to its upper body: free-flyer, legs, left arm,
-  head and both grippers locked at q0 (free-flyer at the origin); active: torso 1-2 and right arm
-  1-7 (9 joints). Flange ``gripper_right_base_link``, approach = its -z axis (towards the
-  fingertips). Rest pose = q0's. The scene stands at Talos's knee height, as in the paper (its
-  deposit and goal box raised to the knees: with the legs fixed, the arm cannot reach the floor).
-  The scenes' floor is the world's z = 0 (the sand solver's ground), so the robot is lowered
-  instead: the same geometry relative to the scene. Base height = the pelvis height of q0 (1.019 m)
-  less the knee height of q0 above the soles (0.400 m, the right knee joint): 0.619 m.
+* ``talos``: example-robot-data's full Talos reduced to its upper body as the authors built it
+  (pyphysx_envs ``robot/talos_arm.py``): free-flyer, legs, left arm, head and both grippers locked
+  at q0 (free-flyer at the origin); active: torso 1-2 (yaw, pitch), right arm 1-7 and a tool-roll
+  joint ``tool_roll_joint`` (10 joints), a revolute joint about the approach axis at the gripper
+  (+-6.14 rad, 2.61 rad/s: the authors' tenth joint). Flange ``tool_roll_link`` (the gripper's
+  ``gripper_right_base_link`` turned by the tool roll), approach = its -z axis (towards the
+  fingertips). Rest pose = q0's, tool roll 0. Base height 0.3 m: the pelvis 0.3 m above the
+  scene's floor (the authors' ``method/utils.py get_default_robot_z``). The paper's text says the
+  scene stands at Talos's knee height; the authors' code lowers the robot further (the pelvis at
+  0.3 m, where the knee height of q0 would put it at 0.619 m), and the code is followed here.
 """
 
 from __future__ import annotations
@@ -37,9 +39,17 @@ PLANAR3_VELOCITY_LIMIT = 2.5
 PLANAR3_BASE_HEIGHT = 0.5
 UR5_BASE_HEIGHT = 0.4
 UR5_NEUTRAL = (0.0, -1.57, 1.57, -1.57, -1.57, 0.0)
-#: Talos's right knee: the scene's floor stands at its height (module docstring).
-TALOS_KNEE_JOINT = "leg_right_4_joint"
+#: Talos's pelvis above the scene's floor, m (the authors' ``get_default_robot_z``).
+TALOS_BASE_HEIGHT = 0.3
 TALOS_ACTIVE_JOINTS = ("torso_1_joint", "torso_2_joint") + tuple(f"arm_right_{i}_joint" for i in range(1, 8))
+#: The tool-roll joint the authors add at Talos's gripper: its name, limit (rad), velocity (rad/s).
+TALOS_TOOL_ROLL_JOINT = "tool_roll_joint"
+TALOS_TOOL_ROLL_LIMIT = 6.14
+TALOS_TOOL_ROLL_VELOCITY = 2.61
+#: Talos's gripper frame, turned by the tool roll into the flange ``tool_roll_link``.
+TALOS_GRIPPER_FRAME = "gripper_right_base_link"
+#: Talos's approach axis in the gripper frame is its -z: the mount frame's rotation.
+TALOS_MOUNT_ROTATION = np.diag([1.0, -1.0, -1.0])
 
 
 def _load_example_robot(name: str):
@@ -116,30 +126,45 @@ def ur5() -> ArmDescription:
     )
 
 
-def talos() -> ArmDescription:
-    """Talos's upper body: torso (2) + right arm (7), everything else locked at q0."""
+def talos(tool_roll: bool = True) -> ArmDescription:
+    """Talos's upper body: torso (2) + right arm (7) + the authors' tool-roll joint (without it
+    when ``tool_roll`` is False: 9 joints, the flange the gripper), everything else locked at q0."""
     robot = _load_example_robot("talos")
     q_ref = np.array(robot.q0, dtype=float)
-    pelvis_height = float(q_ref[2])
-    knee_height = _height_above_soles(robot, TALOS_KNEE_JOINT)
     q_ref[:7] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]  # free-flyer at the origin (x, y, z, quaternion)
     model = _reduced(robot.model, q_ref, TALOS_ACTIVE_JOINTS)
     q_neutral = np.array(
         [robot.q0[robot.model.joints[robot.model.getJointId(name)].idx_q] for name in TALOS_ACTIVE_JOINTS]
     )
+    flange = TALOS_GRIPPER_FRAME
+    if tool_roll:
+        flange = _add_tool_roll(model, TALOS_GRIPPER_FRAME, TALOS_MOUNT_ROTATION)
+        q_neutral = np.append(q_neutral, 0.0)
     return ArmDescription(
         name="talos",
         model=model,
-        flange_frame="gripper_right_base_link",
-        mount_rotation=np.diag([1.0, -1.0, -1.0]),
+        flange_frame=flange,
+        mount_rotation=TALOS_MOUNT_ROTATION,
         q_neutral=q_neutral,
-        base_height=pelvis_height - knee_height,
+        base_height=TALOS_BASE_HEIGHT,
     )
 
 
-def _height_above_soles(robot, joint: str) -> float:  # type: ignore[no-untyped-def]
-    """Height (m) of ``joint`` above the right sole in example-robot-data's q0 (standing pose)."""
-    data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, robot.q0)
-    sole = data.oMf[robot.model.getFrameId("right_sole_link")].translation[2]
-    return float(data.oMi[robot.model.getJointId(joint)].translation[2] - sole)
+def _add_tool_roll(model: pin.Model, frame: str, mount_rotation: np.ndarray) -> str:
+    """Append to ``model`` (in place) a revolute joint about the approach axis (the mount frame's z)
+    at ``frame``, and a frame ``tool_roll_link`` on it placed as ``frame`` at roll 0; its name."""
+    parent = model.frames[model.getFrameId(frame)]
+    mount = pin.SE3(np.asarray(mount_rotation, dtype=float), np.zeros(3))
+    joint = model.addJoint(
+        parent.parentJoint,
+        pin.JointModelRZ(),
+        parent.placement * mount,
+        TALOS_TOOL_ROLL_JOINT,
+        np.array([1.0]),
+        np.array([TALOS_TOOL_ROLL_VELOCITY]),
+        np.array([-TALOS_TOOL_ROLL_LIMIT]),
+        np.array([TALOS_TOOL_ROLL_LIMIT]),
+    )
+    model.appendBodyToJoint(joint, pin.Inertia.FromSphere(0.1, 0.02), pin.SE3.Identity())
+    model.addFrame(pin.Frame("tool_roll_link", joint, mount.inverse(), pin.FrameType.OP_FRAME))
+    return "tool_roll_link"

@@ -1,10 +1,19 @@
-"""The scythe: cut grass stalks with low sweeps."""
+"""The scythe: cut grass stalks with low sweeps.
+
+Dimensions are the authors' (pyphysx_envs ``tools/ScytheTool.py``): a 0.35 m blade, 0.04 m wide
+along the snath and 1 cm thick, at the end of a 0.70 m snath (twice the blade), sticking out
+sideways from it. The tool frame's head point is the authors' tool tip: on the snath's axis at the
+blade's mid-width, 0.68 m from the snath's far end (their ``tool_length``), where the robot holds it.
+"""
 
 from toolimit.tools.record import ToolRecord, ToolSpec
 from toolimit.tools.registry import register_tool
 
+#: Radius of the snath (m): half the authors' 0.04 m handle width. The blade starts at its side.
+SCYTHE_SNATH_RADIUS = 0.02
+
 SCYTHE = ToolRecord(
-    spec=ToolSpec("scythe", length=1.0, head_length=0.05, head_width=0.45),
+    spec=ToolSpec("scythe", length=0.68, head_length=0.04, head_width=0.35),
     scenes={
         "planar": "toolimit.scenes.planar.scythe:PlanarScytheScene",
         "3d": "toolimit.scenes.spatial.scythe:SpatialScytheScene",

@@ -127,6 +127,8 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
     rewards = arrays["alignment_reward"]
     params = unpack_scene_params(arrays)
     tool, world = str(arrays["tool"]), str(arrays["scene_world"])
+    # Each candidate's episode length (a timed goal's cut episodes differ; older files: all frames).
+    frames = np.asarray(arrays.get("episode_frames", np.full(len(positions), positions.shape[1])), dtype=int)
     if positions.ndim != 3 or positions.shape[2] != 3 or quaternions.shape[:2] != positions.shape[:2]:
         raise InputError(
             f"{path}: tip_position must be (K, T, 3) and tip_quaternion_wxyz (K, T, 4), "
@@ -134,7 +136,7 @@ def load_candidates(path: str | os.PathLike[str]) -> tuple[str, str, list[Aligne
         )
     candidates = [
         AlignedCandidate(
-            targets=PoseTargets.from_quaternions(positions[k], quaternions[k], fps),
+            targets=PoseTargets.from_quaternions(positions[k, : frames[k]], quaternions[k, : frames[k]], fps),
             params={name: _row(value, k) for name, value in params.items()},
             alignment_reward=float(rewards[k]),
         )

@@ -23,12 +23,13 @@ if TYPE_CHECKING:
 
 
 def targets_from_alignment(result: AlignmentResult, candidate: Candidate | None = None) -> PoseTargets:
-    """The tool poses of an alignment candidate (default: the best), at the prepared demo's rate:
-    what ``toolimit trajopt --alignment DIR`` reads from ``DIR/aligned_demo.npz``."""
+    """The tool poses of an alignment candidate's episode (default: the best; a timed goal's cut
+    motion, :mod:`toolimit.align.episode_cut`), at the prepared demo's rate: what ``toolimit trajopt
+    --alignment DIR`` reads from ``DIR/aligned_demo.npz``."""
     candidate = candidate if candidate is not None else result.best
     if candidate is None:
         raise InputError("the alignment has no candidate: no sample earned a goal reward")
-    _, _, poses = result.aligned_motion(candidate)
+    poses = result.episode_poses(candidate)
     return PoseTargets(poses.position, poses.rotation, result.demo.fps)
 
 

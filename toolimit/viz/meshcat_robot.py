@@ -127,9 +127,10 @@ def _reduced_mesh_model(name: str, keep: tuple[str, ...]) -> tuple[pin.Model, pi
 
 
 def _check_same_kinematics(robot: RobotModel, model: pin.Model) -> None:
-    """Raise ValueError unless ``model`` has the joints and joint placements of ``robot.model``
-    (the visual geometry hangs on those joints, so they must be the same)."""
-    if tuple(model.names) != tuple(robot.model.names):
+    """Raise ValueError unless ``model`` has the first joints and joint placements of ``robot.model``
+    (the visual geometry hangs on those joints, so they must be the same; the robot may add joints
+    after them that no mesh hangs on, as the Talos's tool roll)."""
+    if tuple(robot.model.names)[: model.njoints] != tuple(model.names):
         raise ValueError(
             f"{robot.name}: the visual model's joints {tuple(model.names)[1:]} differ from the robot's "
             f"{robot.joint_names}"

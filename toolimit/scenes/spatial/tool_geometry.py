@@ -24,9 +24,11 @@ The shapes:
 * **hammer**: a head box ``head_width`` (0.11 m) along x (striking faces at x = +-0.055, normal
   +x on the working side), ``head_length`` (0.035 m) along z, 0.03 m across y, centred on the head
   point; a handle capsule along z to 3 cm beyond the handle end.
-* **scythe**: a thin blade along +x from the head point, ``head_width`` (0.45 m) long, 0.05 m
-  (``head_length``) along z, 4 mm thick across y (the paper's blade is thin across the swing
-  plane); a snath capsule along z from the head point to 5 cm beyond the handle end (1.0 m).
+* **scythe** (the authors' ``ScytheTool``): a blade along +x, ``head_width`` (0.35 m) long, from
+  the snath's side (``SCYTHE_SNATH_RADIUS``, 2 cm from the axis), ``head_length`` (0.04 m) along z
+  centred on the head point, 1 cm thick across y; a snath capsule (radius 2 cm) along z from the
+  blade's far side (the authors' 0.70 m snath) to 3 cm beyond the handle end, where a robot grips. The cutting edge is the blade's side towards the
+  handle (z = +0.02 m), facing +z (:mod:`toolimit.scenes.scythe_cut`).
 
 The working part is always the first box (``tool_boxes(name)[0]``): the spade blade plate, the
 hammer head, the scythe blade. Each tool's record names its builder (``ToolRecord.shapes``,
@@ -43,6 +45,7 @@ import pinocchio as pin
 
 from toolimit.errors import InputError
 from toolimit.tools.registry import load_entry_point, tool_record, tool_spec
+from toolimit.tools.scythe import SCYTHE_SNATH_RADIUS
 
 #: The 3D spade blade (m): length along the tool axis from the tip, width across (tool y). The
 #: original scene's spade mesh has a blade of about 0.17 m x 0.12 m; of the two ways to read it,
@@ -60,8 +63,8 @@ SPADE_PLATE_THICKNESS = 0.006
 SPADE_HANDLE_RADIUS = 0.016
 #: Radius of the hammer handle (m).
 HAMMER_HANDLE_RADIUS = 0.014
-#: Radius of the scythe snath (m).
-SCYTHE_SNATH_RADIUS = 0.018
+#: Thickness of the scythe blade across the tool y axis (m), the authors' ``blade_height``.
+SCYTHE_BLADE_THICKNESS = 0.01
 
 #: RGBA colours for views (0..1).
 COLOURS = {
@@ -189,9 +192,9 @@ def hammer_shapes() -> tuple[list[OrientedBox], list[Capsule]]:
 def scythe_shapes() -> tuple[list[OrientedBox], list[Capsule]]:
     """The scythe's boxes (the working part first) and capsules (see the module docstring)."""
     spec = tool_spec("scythe")
-    boxes = [_box("blade", (0.0, -0.002, 0.0), (spec.head_width, 0.002, spec.head_length), "steel")]
-    r = SCYTHE_SNATH_RADIUS
-    capsules = [_capsule_along_z("snath", 0.0, spec.length + 0.05 - r, r, "wood")]
+    r, y, z = SCYTHE_SNATH_RADIUS, SCYTHE_BLADE_THICKNESS / 2, spec.head_length / 2
+    boxes = [_box("blade", (r, -y, -z), (r + spec.head_width, y, z), "steel")]
+    capsules = [_capsule_along_z("snath", -z + r, spec.length + 0.03 - r, r, "wood")]
     return boxes, capsules
 
 
