@@ -77,7 +77,8 @@ class StopRule:
 
 class EarlyStop(BaseCallback):
     """Checks the policy every ``rule.every`` updates and stops PPO once ``rule.held`` checks in a
-    row reached ``rule.success`` (module docstring).
+    row passed: the policy's mean at ``rule.success``, the training's episodes since the previous
+    check at ``rule.training_success`` (module docstring).
 
     Args:
         task: the task learnt.
@@ -113,12 +114,13 @@ class EarlyStop(BaseCallback):
 
     def _on_rollout_start(self) -> None:
         steps = self.model.num_timesteps
-        update = steps // (self.model.n_steps * self.training_env.num_envs)  # type: ignore[attr-defined]
+        per_update = self.model.n_steps * self.training_env.num_envs  # type: ignore[attr-defined]
+        update = steps // per_update
         if update == 0 or update % self.rule.every or steps <= self.checked_steps:
             return
         self.env.seed(CHECK_SEED + update)
         outcome = rollout(self.model, self.env, deterministic=True).record()
-        since = steps - self.rule.every * self.model.n_steps * self.training_env.num_envs  # type: ignore[attr-defined]
+        since = steps - self.rule.every * per_update
         training = float(np.mean([rate for at, rate in self.training.items() if since < at <= steps]))
         self.record = {
             CHECK_SUCCESS: outcome["success_rate"],
