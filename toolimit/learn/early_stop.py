@@ -103,9 +103,9 @@ class EarlyStop(BaseCallback):
         for line in checks:
             self.passed = self.passed + 1 if self._passes(line[CHECK_SUCCESS], line[CHECK_TRAINING]) else 0
         self.checked_steps = checks[-1]["env_steps"] if checks else -1
-        #: The training episodes' success rate of each update, by PPO steps at its end.
+        #: The training episodes' success rate of each update, by PPO steps at its end (the
+        #: curve's, which :meth:`add_training_success` extends as learning goes on).
         self.training: dict[int, float] = {line["env_steps"]: line["success_rate"] for line in curve}
-        self._successes: list[bool] = []  # the current rollout's finished episodes
         #: The latest check's outcome for the curve (taken by :meth:`take_record`).
         self.record: dict[str, float] = {}
         #: PPO steps when the rule was met (None while learning goes on; a resumed run that had
@@ -140,14 +140,12 @@ class EarlyStop(BaseCallback):
         record, self.record = self.record, {}
         return record
 
-    def _on_step(self) -> bool:
-        self._successes += [info["is_success"] for info in self.locals["infos"] if "episode" in info]
-        return self.stopped_at is None
+    def add_training_success(self, env_steps: int, success_rate: float) -> None:
+        """The success rate of the training episodes of the rollout that ended at ``env_steps``."""
+        self.training[env_steps] = success_rate
 
-    def _on_rollout_end(self) -> None:
-        if self._successes:  # rollouts hold whole episodes: this update's training success
-            self.training[self.model.num_timesteps] = float(np.mean(self._successes))
-        self._successes = []
+    def _on_step(self) -> bool:
+        return self.stopped_at is None
 
     def _on_training_end(self) -> None:
         """Count the steps up to the update judged: SB3 stops after the first step of the next

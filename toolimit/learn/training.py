@@ -163,7 +163,8 @@ class LearningOutcome:
 
 class _Curve(BaseCallback):
     """Appends one line per update to ``curve.jsonl`` (with the early-stopping check of the update,
-    if one was made) and hands it to ``on_record`` (e.g. rerun)."""
+    if one was made) and hands it to ``on_record`` (e.g. rerun); tells the early stopping each
+    update's training success."""
 
     def __init__(
         self,
@@ -206,6 +207,8 @@ class _Curve(BaseCallback):
             else None
         )
         if self.pending is not None:
+            if self.checks is not None:
+                self.checks.add_training_success(self.pending["env_steps"], self.pending["success_rate"])
             self.bar.set_postfix(
                 success=f"{self.pending['success_rate']:.2f}",
                 goal=f"{self.pending['goal_reward_mean']:.1f}",
