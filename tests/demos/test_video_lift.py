@@ -25,9 +25,10 @@ from toolimit.demos.video import (
     write_camera,
     write_tracks,
 )
+from toolimit.demos.video.lift import PIXEL_WIDTHS, _filter_diagonal, _filtered, cross_validated_width
 from toolimit.errors import InvalidSetting, TrackError
 
-EXACT = LiftSettings(smoothing=0.0)
+EXACT = LiftSettings(smoothing=0.0, offset_smoothing=0.0)
 #: A camera 1.2 m high at the origin, looking along +x at the working plane x = 3.
 CAMERA = look_at([0.0, 0.0, 1.2], [3.0, 0.0, 0.4])
 
@@ -70,7 +71,11 @@ def test_projection_and_rays_invert_each_other():
 def test_a_planar_motion_is_lifted_exactly():
     demo = planar_demo(0.5)
     lifted = lift_tracks(
-        project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", smoothing=0.0)
+        project_demo(demo, CAMERA),
+        CAMERA,
+        "spade",
+        24.0,
+        LiftSettings(handle_hint="near", smoothing=0.0, offset_smoothing=0.0),
     )
     np.testing.assert_allclose(lifted.plane_distance, 3.0, atol=1e-9)
     np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
@@ -88,7 +93,11 @@ def test_handle_side_reads_the_hint_off_a_known_motion():
 def test_the_hint_decides_a_mirror_ambiguity(hint):
     demo = held_still()
     lifted = lift_tracks(
-        project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint=hint, smoothing=0.0)
+        project_demo(demo, CAMERA),
+        CAMERA,
+        "spade",
+        24.0,
+        LiftSettings(handle_hint=hint, smoothing=0.0, offset_smoothing=0.0),
     )
     assert lifted.hint_used
     np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
@@ -102,7 +111,7 @@ def test_the_hint_decides_a_mirror_ambiguity(hint):
 
 def test_a_known_plane_point_replaces_the_ground():
     demo = planar_demo(0.5).translated([0.0, 0.0, 0.5])  # the head never touches the ground
-    settings = LiftSettings(handle_hint="near", smoothing=0.0, plane_point=(3.0, 5.0, -1.0))
+    settings = LiftSettings(handle_hint="near", smoothing=0.0, offset_smoothing=0.0, plane_point=(3.0, 5.0, -1.0))
     lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, settings)
     np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
     from_ground = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint="near"))
@@ -133,7 +142,9 @@ def test_dropped_frames_are_filled_and_flagged():
     hidden = np.zeros(demo.n_frames, dtype=bool)
     hidden[[5, 6, 20]] = True
     tracks = EndpointTracks(tracks.head, tracks.handle, ~hidden, tracks.handle_visible & ~hidden)
-    lifted = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", smoothing=0.0))
+    lifted = lift_tracks(
+        tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near", smoothing=0.0, offset_smoothing=0.0)
+    )
     assert lifted.head_filled.tolist() == hidden.tolist()
     seen = ~hidden
     np.testing.assert_allclose(lifted.demo.head[seen], demo.head[seen], atol=1e-9)
@@ -170,7 +181,9 @@ def test_uncertainty_matches_the_spread_over_noise_draws(tilt):
     # tilt 0: the tool seen side-on, its handle's ray tangent to the sphere of the tool's length in
     # every frame (where a finite difference clamped at the tangent reported too little)
     demo = planar_demo(tilt)
-    settings = LiftSettings(handle_hint="near", smoothing=0.0, pixel_noise=1.0, plane_point=(3.0, 0.0, 0.0))
+    settings = LiftSettings(
+        handle_hint="near", smoothing=0.0, offset_smoothing=0.0, pixel_noise=1.0, plane_point=(3.0, 0.0, 0.0)
+    )
     head_rms, handle_rms, lifted, _ = _spread_over_draws(demo, settings, 1.0)
     for rms, sigma in ((head_rms, lifted.head_sigma), (handle_rms, lifted.handle_sigma)):
         ratio = rms / sigma
@@ -185,6 +198,32 @@ def test_the_handle_depth_filter_removes_the_side_on_tools_tilt():
     demo = planar_demo(0.0)
     _, _, lifted, axis = _spread_over_draws(demo, LiftSettings(handle_hint="near"), 3.0, draws=20)
     assert axis < 3.9
+
+
+def test_filter_diagonal_is_the_dense_maps():
+    # the diagonal of the time filter's linear map (seen values -> their filtered values), read off
+    # impulses filtered many at a time, equals the one read off the dense map, with gaps and ends
+    rng = np.random.default_rng(3)
+    for n_frames in (12, 80):
+        frames = np.sort(rng.choice(n_frames, size=int(0.8 * n_frames), replace=False))
+        for width in (0.5, 2.0, 8.0):
+            dense = _filtered(np.eye(len(frames)), frames, n_frames, width)[frames]
+            np.testing.assert_allclose(_filter_diagonal(frames, n_frames, width), np.diag(dense), atol=1e-12)
+
+
+def test_cross_validation_smooths_noise_and_keeps_a_fast_motion():
+    frames = np.arange(60)
+    noise = np.random.default_rng(0).normal(size=(60, 2))
+    assert cross_validated_width(5.0 + noise, frames, 60) >= 2.0, "a still end: a wide filter"
+    fast = np.column_stack([np.sin(2 * np.pi * frames / 5), np.cos(2 * np.pi * frames / 5)])
+    assert cross_validated_width(fast, frames, 60) == PIXEL_WIDTHS[0], "a turn every few frames: the narrowest"
+
+
+def test_the_lift_reports_each_ends_pixel_filter():
+    tracks = perturbed(project_demo(planar_demo(0.5), CAMERA), 2.0, 0.0, seed=1)
+    chosen = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near")).pixel_smoothing
+    assert all(width in PIXEL_WIDTHS for width in chosen)
+    assert lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(smoothing=1.5)).pixel_smoothing == (1.5, 1.5)
 
 
 # --- refusals --------------------------------------------------------------------------------------
@@ -227,6 +266,8 @@ def test_a_camera_below_the_ground_and_one_looking_down():
         ("plane_point", (1.0, 2.0)),
         ("contact_share", 0.0),
         ("smoothing", -1.0),
+        ("smoothing", float("nan")),
+        ("offset_smoothing", -1.0),
     ],
 )
 def test_settings_refuse_bad_values(field, value):

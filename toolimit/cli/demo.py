@@ -97,7 +97,8 @@ LIFT_FLAGS = (
     Flag("plane_point", parse=_point, show=lambda point: "from the ground contacts" if point is None else str(point)),
     Flag("contact_share"),
     Flag("pixel_noise"),
-    Flag("smoothing"),
+    Flag("smoothing", show=lambda width: "chosen for each end by cross-validation" if width is None else str(width)),
+    Flag("offset_smoothing"),
 )
 
 

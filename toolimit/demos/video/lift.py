@@ -17,12 +17,15 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    side is as smooth as the motion), ``handle_hint`` decides, and without a hint the lift refuses
    rather than return a mirrored demonstration.
 4. **The handle's depth** along its ray is smoothed over time: its signed offset from the foot
-   (+ far, - near) is filtered like the pixels. Where the ray grazes the sphere of the tool's length
+   (+ far, - near) is filtered by a Gaussian in time. Where the ray grazes the sphere of the tool's length
    (a tool seen nearly side-on), the offset is the square root of a small noisy number: pixel noise
    there becomes a one-sided depth error, and the near/far choice flips between frames; filtering
    the signed offset averages the flips out, which filtering the pixels alone cannot do.
 
-Frames where an end is not visible are filled by linear interpolation of the lifted points. The
+Before all this, each end's pixel track is filtered by a Gaussian in time whose width is chosen for
+that end by generalised cross-validation (:func:`cross_validated_width`): as narrow as a fast turn
+needs, as wide as a slow motion's noise allows. Frames where an end is not visible are filled by
+linear interpolation of the lifted points. The
 per-frame uncertainty is the position change caused by the track error left after smoothing
 (``pixel_noise`` pixels before it) and by the plane distance's uncertainty: it does not include the
 motion's departure from the plane, which is the main error on real motions (README, "Stage (i) from
@@ -48,6 +51,9 @@ HANDLE_HINTS = ("near", "far")
 #: leaves the hint only where the smooth path clearly crosses to the other side. Measured on the
 #: benchmark's synthetic hammer (3 px): 1e-3 (a tie-breaker) gave 10.8 deg of axis error, 1 gave 5.7.
 HINT_WEIGHT = 1.0
+#: The pixel filter widths (frames, Gaussian standard deviation) cross-validation chooses from:
+#: 0.5 to 8 frames in steps of sqrt(2).
+PIXEL_WIDTHS = tuple(0.5 * 2 ** (k / 2) for k in range(9))
 
 
 @dataclass(frozen=True)
@@ -64,9 +70,11 @@ class LiftSettings:
             ray-ground meetings).
         pixel_noise: standard deviation of the tracks' pixel error, for the per-frame uncertainty.
         smoothing: standard deviation, in frames, of the Gaussian filter run along each end's pixel
-            track before the lift and along the handle end's signed depth offset after the near/far
-            choice (0: none); it averages out track noise a tool's motion at video rates does not
-            have.
+            track before the lift (0: none; None: chosen for each end by generalised
+            cross-validation from ``PIXEL_WIDTHS``); it averages out track noise a tool's motion at
+            video rates does not have.
+        offset_smoothing: standard deviation, in frames, of the Gaussian filter run along the
+            handle end's signed depth offset after the near/far choice (0: none).
         min_visible_share: each end must be visible in at least this share of the frames.
         mirror_ratio: the mirrored handle path counts as an equal explanation when its squared
             acceleration is less than this many times the best path's.
@@ -77,7 +85,8 @@ class LiftSettings:
     plane_point: tuple[float, float, float] | None = None
     contact_share: float = 0.05
     pixel_noise: float = 3.0
-    smoothing: float = 1.0
+    smoothing: float | None = None
+    offset_smoothing: float = 1.0
     min_visible_share: float = 0.5
     mirror_ratio: float = 1.5
 
@@ -94,8 +103,14 @@ class LiftSettings:
             raise InvalidSetting("contact_share", f"must be in (0, 1], got {self.contact_share!r}")
         if not (math.isfinite(self.pixel_noise) and self.pixel_noise >= 0):
             raise InvalidSetting("pixel_noise", f"must be a non-negative number of pixels, got {self.pixel_noise!r}")
-        if not (math.isfinite(self.smoothing) and self.smoothing >= 0):
-            raise InvalidSetting("smoothing", f"must be a non-negative number of frames, got {self.smoothing!r}")
+        if self.smoothing is not None and not (math.isfinite(self.smoothing) and self.smoothing >= 0):
+            raise InvalidSetting(
+                "smoothing", f"must be a non-negative number of frames or None, got {self.smoothing!r}"
+            )
+        if not (math.isfinite(self.offset_smoothing) and self.offset_smoothing >= 0):
+            raise InvalidSetting(
+                "offset_smoothing", f"must be a non-negative number of frames, got {self.offset_smoothing!r}"
+            )
         if not 0 < self.min_visible_share <= 1:
             raise InvalidSetting("min_visible_share", f"must be in (0, 1], got {self.min_visible_share!r}")
         if not self.mirror_ratio >= 1:
@@ -116,6 +131,7 @@ class LiftedDemo:
         plane_normal: (3,) horizontal unit normal of the working plane, pointing away from the camera.
         plane_distance: the plane's distance from the camera's centre along that normal, metres.
         hint_used: whether the handle's sides came from ``handle_hint`` (a mirror ambiguity).
+        pixel_smoothing: the pixel filter's width for the head and for the handle end, frames.
     """
 
     demo: ToolDemo
@@ -127,6 +143,7 @@ class LiftedDemo:
     plane_normal: np.ndarray
     plane_distance: float
     hint_used: bool
+    pixel_smoothing: tuple[float, float]
 
 
 def ray_plane_intersection(origin: np.ndarray, rays: np.ndarray, normal: np.ndarray, distance: float) -> np.ndarray:
@@ -185,7 +202,8 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
 
     length = settings.tool_length if settings.tool_length is not None else tool_spec(tool).length
     _check_visible(tracks, settings.min_visible_share)
-    tracks = smoothed(tracks, settings.smoothing)
+    widths = pixel_widths(tracks, settings.smoothing)
+    tracks = smoothed(tracks, widths)
     origin = camera.centre
     if origin[2] <= 0:
         raise TrackError(f"camera: its centre is at height {origin[2]:.3f} m, not above the ground (z = 0)")
@@ -199,7 +217,7 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     behind = head_frames[head_rays @ normal <= 1e-6]
     if behind.size:
         raise TrackError(f"tracks: the head's ray points away from the working plane at frames {behind[:10].tolist()}")
-    distance, distance_sigma = _plane_distance(camera, tracks.head[head_frames], normal, settings)
+    distance, distance_sigma = _plane_distance(camera, tracks.head[head_frames], normal, settings, widths[0])
     head = _filled(ray_plane_intersection(origin, head_rays, normal, distance), head_frames, tracks.n_frames)
 
     handle_frames = np.flatnonzero(tracks.handle_visible)
@@ -207,8 +225,8 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     near, far, offset = handle_candidates(origin, handle_rays, head[handle_frames], length)
     far_chosen, hint_used = _handle_sides(near, far, offset, settings)
     signed = np.where(far_chosen, offset, -offset)
-    if settings.smoothing > 0:
-        signed = _filtered(signed[:, None], handle_frames, tracks.n_frames, settings.smoothing)[handle_frames, 0]
+    if settings.offset_smoothing > 0:
+        signed = _filtered(signed[:, None], handle_frames, tracks.n_frames, settings.offset_smoothing)[handle_frames, 0]
     far_chosen = signed > 0
     foot, _ = squared_offset(origin, handle_rays, head[handle_frames], length)
     handle = _filled(_on_ray(origin, handle_rays, foot + signed), handle_frames, tracks.n_frames)
@@ -216,7 +234,18 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     handle = head + length * axis / np.linalg.norm(axis, axis=1, keepdims=True)
 
     head_sigma, handle_sigma = _uncertainty(
-        camera, tracks, head_frames, handle_frames, head, handle, normal, distance, distance_sigma, length, settings
+        camera,
+        tracks,
+        head_frames,
+        handle_frames,
+        head,
+        handle,
+        normal,
+        distance,
+        distance_sigma,
+        length,
+        settings,
+        widths,
     )
     demo = ToolDemo(head, handle, fps, tool, source=f"lifted from 2D tracks ({tracks.n_frames} frames)")
     return LiftedDemo(
@@ -229,18 +258,64 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
         plane_normal=normal,
         plane_distance=distance,
         hint_used=hint_used,
+        pixel_smoothing=widths,
     )
 
 
-def smoothed(tracks: EndpointTracks, frames: float) -> EndpointTracks:
-    """``tracks`` with each end's pixels filtered along time by a Gaussian of ``frames`` standard
-    deviation (gaps bridged linearly for the filter; visibility unchanged)."""
-    if frames == 0:
-        return tracks
+def pixel_widths(tracks: EndpointTracks, smoothing: float | None) -> tuple[float, float]:
+    """The pixel filter's width (frames) for the head and for the handle end: ``smoothing`` for
+    both, or (None) each end's :func:`cross_validated_width`."""
+    if smoothing is not None:
+        return smoothing, smoothing
+    head, handle = (
+        cross_validated_width(getattr(tracks, name)[seen], seen, tracks.n_frames)
+        for name, seen in (
+            ("head", np.flatnonzero(tracks.head_visible)),
+            ("handle", np.flatnonzero(tracks.handle_visible)),
+        )
+    )
+    return head, handle
+
+
+def cross_validated_width(values: np.ndarray, frames: np.ndarray, n_frames: int) -> float:
+    """The width of ``PIXEL_WIDTHS`` (frames) whose time filter (:func:`_filtered`) gives ``values``
+    (m, k), seen at ``frames`` (m,), the least generalised cross-validation score
+    ``m * |values - S values|^2 / (m - trace S)^2``: an estimate of the error in predicting a
+    left-out frame, which needs no noise level (Craven and Wahba, 1979). ``S`` is the filter's
+    linear map from the seen values to their filtered values."""
+    scores = []
+    for width in PIXEL_WIDTHS:
+        residual = values - _filtered(values, frames, n_frames, width)[frames]
+        trace = float(np.sum(_filter_diagonal(frames, n_frames, width)))
+        scores.append(len(frames) * float(np.sum(residual**2)) / (len(frames) - trace) ** 2)
+    return PIXEL_WIDTHS[int(np.argmin(scores))]
+
+
+def _filter_diagonal(frames: np.ndarray, n_frames: int, width: float) -> np.ndarray:
+    """(m,) the diagonal of the time filter's linear map from values seen at ``frames`` (m,) to their
+    filtered values: each value's weight on itself. A value reaches no farther than the filter's
+    pad plus the longest gap, so impulses twice that far apart are filtered in one pass."""
+    count = len(frames)
+    longest_gap = int(np.max(np.diff(frames))) if count > 1 else 1
+    spacing = 2 * (4 * math.ceil(width) + longest_gap) + 1
+    diagonal = np.empty(count)
+    for start in range(min(spacing, count)):
+        chosen = np.arange(start, count, spacing)
+        impulses = np.zeros((count, 1))
+        impulses[chosen] = 1.0
+        diagonal[chosen] = _filtered(impulses, frames, n_frames, width)[frames[chosen], 0]
+    return diagonal
+
+
+def smoothed(tracks: EndpointTracks, widths: tuple[float, float]) -> EndpointTracks:
+    """``tracks`` with each end's pixels filtered along time by a Gaussian of ``widths`` (head,
+    handle end) frames standard deviation (0: unfiltered; gaps bridged linearly for the filter;
+    visibility unchanged)."""
     ends = {}
-    for name in ("head", "handle"):
-        seen = np.flatnonzero(getattr(tracks, f"{name}_visible"))
-        ends[name] = _filtered(getattr(tracks, name)[seen], seen, tracks.n_frames, frames)
+    for name, width in zip(("head", "handle"), widths):
+        if width > 0:
+            seen = np.flatnonzero(getattr(tracks, f"{name}_visible"))
+            ends[name] = _filtered(getattr(tracks, name)[seen], seen, tracks.n_frames, width)
     return replace(tracks, **ends)
 
 
@@ -273,13 +348,13 @@ def _check_visible(tracks: EndpointTracks, min_share: float) -> None:
 
 
 def _plane_distance(
-    camera: Camera, pixels: np.ndarray, normal: np.ndarray, settings: LiftSettings
+    camera: Camera, pixels: np.ndarray, normal: np.ndarray, settings: LiftSettings, width: float
 ) -> tuple[float, float]:
     """The working plane's distance from the camera along ``normal`` (metres) and its standard
     uncertainty: from ``settings.plane_point`` (exact), or from the nearest meetings with the ground
     of the head's rays through ``pixels`` (N, 2), uncertain by their spread and by the move of a
     meeting under the track noise, in quadrature (the nearest of noisy meetings are drawn near by
-    about that much)."""
+    about that much; ``width``: the head's pixel filter, frames)."""
     origin, rays = camera.centre, camera.rays(pixels)
     if settings.plane_point is not None:
         distance = float(normal @ (np.asarray(settings.plane_point) - origin))
@@ -299,7 +374,7 @@ def _plane_distance(
     nearest = ground[chosen]
     moved = [
         _ground_meeting(origin, camera.rays(downward_pixels[chosen] + step), normal) - nearest
-        for step in _pixel_steps(settings)
+        for step in _pixel_steps(settings.pixel_noise, width)
     ]
     pixel_spread = float(np.sqrt(np.mean(sum(np.square(move) for move in moved))))
     return float(nearest.mean()), math.hypot(float(nearest.std()), pixel_spread)
@@ -397,9 +472,11 @@ def _uncertainty(
     distance_sigma: float,
     length: float,
     settings: LiftSettings,
+    widths: tuple[float, float],
 ) -> tuple[np.ndarray, np.ndarray]:
     """(T,) standard uncertainty of head and handle end, metres: the changes caused by moving each
-    pixel coordinate of either end by the track noise (:func:`_pixel_steps`) and the plane by its
+    pixel coordinate of either end by the track noise left after that end's filter of ``widths``
+    (head, handle end; :func:`_pixel_steps`) and the plane by its
     distance's uncertainty, added in quadrature (finite
     differences of the lift itself); interpolated over the frames an end is not seen.
 
@@ -410,14 +487,14 @@ def _uncertainty(
     (``sqrt(sigma_q) / 2``) where the ray grazes the tool-length sphere, where a finite difference
     clamped at the tangent reports almost nothing."""
     origin, n_frames = camera.centre, tracks.n_frames
-    steps = _pixel_steps(settings)
+    head_steps, handle_steps = (_pixel_steps(settings.pixel_noise, width) for width in widths)
     head_pixels = tracks.head[head_frames]
 
     def head_at(pixels: np.ndarray, plane: float) -> np.ndarray:
         return _filled(ray_plane_intersection(origin, camera.rays(pixels), normal, plane), head_frames, n_frames)
 
     head_moves = [head_at(head_pixels, distance + distance_sigma)] + [
-        head_at(head_pixels + step, distance) for step in steps
+        head_at(head_pixels + step, distance) for step in head_steps
     ]
     head_sigma = np.sqrt(sum(np.sum((moved - head) ** 2, axis=1) for moved in head_moves))
 
@@ -427,7 +504,7 @@ def _uncertainty(
     foot, squared_depth = squared_offset(origin, rays, heads, length)
     ranges = np.sum(rays * (handle[handle_frames] - origin), axis=1)
     moves = [(rays, moved[handle_frames]) for moved in head_moves]
-    moves += [(camera.rays(handle_pixels + step), heads) for step in steps]
+    moves += [(camera.rays(handle_pixels + step), heads) for step in handle_steps]
     sideways = foot_spread = depth_spread = np.zeros(len(handle_frames))
     for moved_rays, moved_heads in moves:
         moved_foot, moved_depth = squared_offset(origin, moved_rays, moved_heads, length)
@@ -441,15 +518,14 @@ def _uncertainty(
     return head_sigma, _filled(seen[:, None], handle_frames, n_frames)[:, 0]
 
 
-def _pixel_steps(settings: LiftSettings) -> tuple[np.ndarray, np.ndarray]:
+def _pixel_steps(noise: float, width: float) -> tuple[np.ndarray, np.ndarray]:
     """The moves (px) of a pixel's u and v by one standard deviation of the track noise left after
-    the lift's smoothing: ``pixel_noise`` times the root of the sum of the squared weights of the
-    Gaussian filter (white noise's share that passes it; 1 without smoothing)."""
+    a filter of ``width`` frames: ``noise`` px times the root of the sum of the squared weights of
+    the Gaussian filter (white noise's share that passes it; 1 without filter)."""
     kept = 1.0
-    if settings.smoothing > 0:
-        impulse = np.zeros((16 * math.ceil(settings.smoothing) + 1, 1))
+    if width > 0:
+        impulse = np.zeros((16 * math.ceil(width) + 1, 1))
         impulse[len(impulse) // 2] = 1.0
-        weights = _filtered(impulse, np.arange(len(impulse)), len(impulse), settings.smoothing)
+        weights = _filtered(impulse, np.arange(len(impulse)), len(impulse), width)
         kept = float(np.sqrt(np.sum(weights**2)))
-    noise = settings.pixel_noise * kept
-    return np.array([noise, 0.0]), np.array([0.0, noise])
+    return np.array([noise * kept, 0.0]), np.array([0.0, noise * kept])
