@@ -12,20 +12,26 @@ import pytest
 
 from toolimit.artifacts import load_npz, save_npz
 from toolimit.cli import main as toolimit
-from toolimit.learn.task import TaskFileError, task_from_pipeline
+from toolimit.learn.task import LearningTask, TaskFileError, task_from_pipeline
 from toolimit.pipeline import PipelineSettings, TrajectoryStage, align_stage, trajopt_from_poses, trajopt_stage
+from toolimit.pipeline import stages as stages_module
+from toolimit.pipeline.settings import with_values
+from toolimit.pipeline.shortlist import ShortlistEntry, best_to_learn, read_shortlist, shortlist_folder
+from toolimit.pipeline.stages import CLONE_ATTEMPTS_JSON, learn_stage
 from toolimit.trajopt.result import TrajectoryResult
 
 REPO = Path(__file__).resolve().parents[1]
 DEMO = REPO / "data" / "demos" / "spade_03.npz"
 QUICK = PipelineSettings.for_world("planar", quick=True)
+#: Enough candidates for two robot replays with a reward: a shortlist to fall back on.
+ALIGN = with_values(QUICK.align, {"search.candidates": 6})
 
 
 @pytest.fixture(scope="module")
 def stages(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, TrajectoryStage]:
     """Stages ii and iii of the planar spade on quick budgets: (folder, what trajopt kept)."""
     out = tmp_path_factory.mktemp("pipeline")
-    align_stage(DEMO, "spade", "planar", out / "alignment", QUICK.align, progress=False)
+    align_stage(DEMO, "spade", "planar", out / "alignment", ALIGN, progress=False)
     kept = trajopt_stage(out / "alignment", "planar3", out / "trajectory", QUICK.trajopt, progress=False)
     return out, kept
 
@@ -39,7 +45,8 @@ def test_the_trajectory_records_the_selected_candidate_not_the_best_aligned(stag
     out, kept = stages
     assert kept.selection is not None and kept.trajectory.scene is not None
     chosen = kept.trajectory.scene.candidate
-    assert chosen == kept.selection.best
+    assert chosen == best_to_learn(kept.shortlist).candidate
+    assert json.loads((out / "trajectory" / "selection.json").read_text())["kept"] == chosen
     assert chosen != _best_tool_only(kept), "the case this test is about: the robot's choice is not the tool's"
     loaded = TrajectoryResult.load(out / "trajectory")
     assert loaded.scene is not None and loaded.scene.candidate == chosen and loaded.scene.world == "planar"
@@ -49,6 +56,54 @@ def test_the_trajectory_records_the_selected_candidate_not_the_best_aligned(stag
         np.testing.assert_allclose(task.params[name], value)
     best = kept.candidates[_best_tool_only(kept)].params
     assert any(not np.allclose(task.params[name], best[name]) for name in best)
+
+
+def test_the_shortlist_is_the_best_robot_replays_tracked_in_their_learning_tasks(stages) -> None:
+    out, kept = stages
+    assert kept.selection is not None
+    rewards = np.nan_to_num(kept.selection.robot_rewards, nan=0.0)
+    ranked = sorted((k for k in range(len(rewards)) if rewards[k] > 0), key=lambda k: -rewards[k])
+    assert [entry.candidate for entry in kept.shortlist] == ranked[: QUICK.trajopt.shortlist]
+    task = task_from_pipeline(out / "alignment", out / "trajectory", seed=QUICK.trajopt.seed)
+    entry = next(entry for entry in kept.shortlist if entry.candidate == kept.trajectory.scene.candidate)
+    assert entry.horizon == task.horizon, "judged in the very task the learner builds"
+    record = json.loads((out / "trajectory" / "selection.json").read_text())
+    assert record["shortlist"] == [entry.record() for entry in kept.shortlist]
+    assert all(0.0 <= entry.success_rate <= 1.0 for entry in kept.shortlist)
+
+
+def test_the_kept_candidate_is_the_most_often_successful_tracking_then_the_robot_order() -> None:
+    def entry(k: int, success: float, goal: float) -> ShortlistEntry:
+        return ShortlistEntry(
+            candidate=k, robot_reward=20.0 - k, horizon=90, success_rate=success, goal_reward_mean=goal
+        )
+
+    assert best_to_learn([entry(0, 0.75, 12.0), entry(1, 0.95, 11.0), entry(2, 0.95, 10.0)]).candidate == 1
+    assert best_to_learn([entry(3, 0.5, 9.0), entry(4, 0.5, 9.0)]).candidate == 3
+    with pytest.raises(ValueError, match="empty"):
+        best_to_learn([])
+
+
+def test_a_clone_that_does_not_reproduce_its_expert_gives_way_to_the_next_shortlisted_candidate(
+    stages, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out, kept = stages
+    order = [entry.candidate for entry in read_shortlist(out / "trajectory")]
+    assert len(order) == 2 and order[0] == kept.trajectory.scene.candidate
+    for candidate in order:
+        assert TrajectoryResult.load(shortlist_folder(out / "trajectory", candidate)).scene.candidate == candidate
+    checked: list[dict] = []
+    monkeypatch.setattr(stages_module, "clone_reproduces", lambda record: checked.append(record) or False)
+    learning = tmp_path / "learning"
+    outcome = learn_stage(out / "alignment", out / "trajectory", learning, QUICK.learning, progress=False)
+    assert len(checked) == 1, "the last shortlisted candidate is learnt whatever its clone"
+    attempts = json.loads((learning / CLONE_ATTEMPTS_JSON).read_text())
+    assert [attempt["candidate"] for attempt in attempts] == order[:1]
+    assert attempts[0]["success_rate"] == checked[0]["clone_check"]["success_rate"]
+    assert outcome.record["ppo_env_steps"] > 0
+    assert LearningTask.load(learning / "task.npz").source["candidate"] == str(order[1])
+    check = json.loads((learning / "cloning.json").read_text())["clone_check"]
+    assert check["episodes"] == 20 and 0.0 <= check["success_rate"] <= 1.0
 
 
 def test_without_selection_the_best_tool_only_candidate_is_tracked_and_recorded(stages, tmp_path: Path) -> None:
@@ -114,8 +169,21 @@ def _readme_python_block() -> str:
 def command_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], Path]:
     """``toolimit run --quick`` on the planar spade: (its arguments, its folder)."""
     out = tmp_path_factory.mktemp("command")
-    argv = ["run", "--tool", "spade", "--robot", "planar3", "--world", "planar", "--demo", str(DEMO),
-            "--out", str(out), "--quick", "--quiet"]
+    argv = [
+        "run",
+        "--tool",
+        "spade",
+        "--robot",
+        "planar3",
+        "--world",
+        "planar",
+        "--demo",
+        str(DEMO),
+        "--out",
+        str(out),
+        "--quick",
+        "--quiet",
+    ]
     assert toolimit(argv) == 0
     return argv, out
 

@@ -12,10 +12,19 @@ from toolimit.errors import InputError, InvalidLearningConfig
 from toolimit.learn import BatchedTaskVecEnv
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.ppo import PRESETS, make_ppo
-from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
+from toolimit.learn.training import CLONE_CHECK_EPISODES, CURVE_JSONL, LearningConfig, learn_policy, load_policy
 
-TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20,
-                      value_steps=20, checkpoint_every=1, seed=0)
+TINY = LearningConfig(
+    timesteps=0,
+    envs=2,
+    preset="toolimit",
+    clone_rollouts=2,
+    clone_noise=0.3,
+    clone_steps=20,
+    value_steps=20,
+    checkpoint_every=1,
+    seed=0,
+)
 
 
 def _parameters(model):
@@ -30,7 +39,8 @@ def test_files_and_record(spade_task, tmp_path):
         assert (tmp_path / name).is_file(), name
     assert not (tmp_path / "checkpoint.zip").exists()  # the final checkpoint is policy.zip: one copy
     record = json.loads((tmp_path / "learning.json").read_text())
-    assert record["ppo_env_steps"] == 2 * horizon * 2 and record["cloning_env_steps"] == 2 * horizon
+    assert record["ppo_env_steps"] == 2 * horizon * 2
+    assert record["cloning_env_steps"] == (2 + CLONE_CHECK_EPISODES) * horizon, "the rollouts, then the clone's check"
     assert record["env_steps"] == record["ppo_env_steps"] + record["cloning_env_steps"]
     assert 0 < record["simulation_time_s"] < record["wall_time_s"]
     curve = [json.loads(line) for line in (tmp_path / CURVE_JSONL).read_text().splitlines()]
@@ -66,8 +76,9 @@ def test_a_finished_run_continues_to_a_larger_budget_exactly(spade_task, tmp_pat
     per_update = spade_task.horizon * 2
     three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
-    learn_policy(spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}),
-                 progress=False)
+    learn_policy(
+        spade_task, tmp_path / "split", LearningConfig(**{**TINY.__dict__, "timesteps": per_update}), progress=False
+    )
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)

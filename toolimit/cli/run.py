@@ -33,7 +33,10 @@ from toolimit.pipeline.settings import QUICK, WORLD_PRESETS, PipelineSettings
 #: the seed, which ``--seed`` gives every stage (:meth:`PipelineSettings.with_seed`).
 RUN_FLAGS = (
     *nested("align", SEARCH_FLAGS),
-    *nested("trajopt", [flag for flag in TRAJOPT_FLAGS if flag.path in ("weights.velocity", "starts", "time_scales")]),
+    *nested(
+        "trajopt",
+        [flag for flag in TRAJOPT_FLAGS if flag.path in ("weights.velocity", "starts", "time_scales", "shortlist")],
+    ),
     *nested("learning", [flag for flag in LEARNING_FLAGS if flag.path != "seed"]),
     Flag("evaluation.episodes"),
 )

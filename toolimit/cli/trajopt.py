@@ -60,6 +60,8 @@ TRAJOPT_FLAGS = (
     Flag("init", choices=tuple(INIT_CHOICES)),
     Flag("time_scales", "--time-scale", parse=parse_time_scales, show=_show_scales),
     Flag("select_by_robot"),
+    Flag("shortlist"),
+    Flag("shortlist_episodes"),
     Flag("seed"),
     Flag("workers", show=show_workers),
 )

@@ -32,6 +32,7 @@ from toolimit.learn.adr import goal_box_spec
 from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
 from toolimit.learn.early_stop import EarlyStop, StopRule
+from toolimit.learn.evaluate import evaluate
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
     POLICY_ZIP,
@@ -48,6 +49,10 @@ from toolimit.progress import progress_bar
 from toolimit.scenes.registry import make_scene
 
 LEARNING_JSON = "learning.json"
+#: The cloned policy's deterministic episodes before PPO (``cloning.json``'s ``clone_check``), seeded
+#: ``CLONE_CHECK_SEED + seed``, apart from the training, early-stopping and evaluation seeds.
+CLONE_CHECK_EPISODES = 20
+CLONE_CHECK_SEED = 4000
 CLONING_JSON = "cloning.json"
 CURVE_JSONL = "curve.jsonl"
 
@@ -243,18 +248,29 @@ class _Curve(BaseCallback):
         self.bar.close()
 
 
+class CloneRejected(Exception):
+    """The cloned policy failed the caller's check (:func:`learn_policy`'s ``accept_clone``); PPO
+    was not started and no checkpoint written. ``record``: the cloning record (``cloning.json``)."""
+
+    def __init__(self, record: dict[str, Any]) -> None:
+        super().__init__(f"the cloned policy was not accepted: {record.get('clone_check')}")
+        self.record = record
+
+
 def learn_policy(
     task: LearningTask,
     out_dir: str | Path,
     config: LearningConfig = LearningConfig(),
     on_record: Callable[[dict[str, Any]], None] | None = None,
     progress: bool = True,
+    accept_clone: Callable[[dict[str, Any]], bool] | None = None,
 ) -> LearningOutcome:
-    """Clone (optional), warm the value up and fine-tune by PPO; see the module docstring."""
+    """Clone (optional), warm the value up and fine-tune by PPO; see the module docstring.
+    ``accept_clone(cloning record)``: False raises :class:`CloneRejected` before PPO starts."""
     threads = torch.get_num_threads()
     torch.set_num_threads(config.torch_threads)
     try:
-        return _learn_policy(task, Path(out_dir), config, on_record, progress)
+        return _learn_policy(task, Path(out_dir), config, on_record, progress, accept_clone)
     finally:
         torch.set_num_threads(threads)
 
@@ -265,6 +281,7 @@ def _learn_policy(
     config: LearningConfig,
     on_record: Callable[[dict[str, Any]], None] | None,
     progress: bool,
+    accept_clone: Callable[[dict[str, Any]], bool] | None,
 ) -> LearningOutcome:
     started = time.perf_counter()
     settings = config.settings()
@@ -288,6 +305,8 @@ def _learn_policy(
         if config.clone:
             cloning_record.update(_clone(model, task, config, settings, progress))
             save_json(out_dir / CLONING_JSON, cloning_record)
+            if accept_clone is not None and not accept_clone(cloning_record):
+                raise CloneRejected(cloning_record)
         return model
 
     previous = _previous_record(out_dir)
@@ -355,13 +374,26 @@ def _clone(
         seed=config.seed,
         progress=progress,
     )
+    check = evaluate(
+        model,
+        task,
+        CLONE_CHECK_EPISODES,
+        deterministic=True,
+        seed=CLONE_CHECK_SEED + config.seed,
+        scene_kwargs=config.scene_kwargs,
+    )
     return {
         "rollouts": config.clone_rollouts,
         "action_noise": config.clone_noise,
-        "env_steps": demonstrations.env_steps,
+        "env_steps": demonstrations.env_steps + CLONE_CHECK_EPISODES * task.horizon,
         "pairs": len(demonstrations.actions),
         "controller_goal_rewards": demonstrations.goal_rewards.tolist(),
         "controller_successes": demonstrations.successes.tolist(),
+        "clone_check": {
+            "episodes": CLONE_CHECK_EPISODES,
+            "success_rate": check.record()["success_rate"],
+            "goal_reward_mean": check.record()["goal_reward_mean"],
+        },
         **asdict(report),
     }
 

@@ -77,7 +77,11 @@ class TrajoptSettings:
         select_by_robot: from an alignment, track every candidate, replay the robot in its scene
             and keep the one whose replay earns most (the paper's selection); False tracks the
             best tool-only candidate alone.
-        seed: seed of the random starts and the robot replays.
+        shortlist: how many of the best candidates by robot reward are tracked in their learning
+            tasks, where the one whose tracking succeeds most often is kept
+            (:mod:`toolimit.pipeline.shortlist`); 0 keeps the best robot reward (the paper's rule).
+        shortlist_episodes: tracking episodes per shortlisted candidate.
+        seed: seed of the random starts, the robot replays and the shortlist's learning tasks.
         workers: processes tracking candidates side by side (None: one per core, up to 4); the
             selection does not depend on it.
     """
@@ -87,11 +91,15 @@ class TrajoptSettings:
     init: str = "both"
     time_scales: tuple[float, ...] = (1.0,)
     select_by_robot: bool = True
+    shortlist: int = 8
+    shortlist_episodes: int = 20
     seed: int = 0
     workers: int | None = None
 
     def __post_init__(self) -> None:
         _check_integer("starts", self.starts, 1)
+        _check_integer("shortlist", self.shortlist, 0)
+        _check_integer("shortlist_episodes", self.shortlist_episodes, 1)
         _check_integer("seed", self.seed, 0)
         if self.workers is not None:
             _check_integer("workers", self.workers, 1)
@@ -204,6 +212,8 @@ QUICK: dict[str, Any] = {
     "align.search.samples": 3000,
     "align.search.candidates": 3,
     "trajopt.starts": 2,
+    "trajopt.shortlist": 2,
+    "trajopt.shortlist_episodes": 4,
     "learning.timesteps": 2_000,
     "learning.envs": 4,
     "learning.clone_steps": 300,

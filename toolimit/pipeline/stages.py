@@ -15,7 +15,7 @@ writing its record; each one's lines for a person to read come from the ``descri
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -29,9 +29,26 @@ from toolimit.demos import ToolDemo, load_demo
 from toolimit.distributed import RayTarget
 from toolimit.errors import InputError, StageFoundNothing
 from toolimit.learn.evaluate import Evaluation, evaluate, save_rollout_trajectory
-from toolimit.learn.task import LearningTask, task_from_pipeline
-from toolimit.learn.training import LEARNING_JSON, LearningConfig, LearningOutcome, learn_policy, load_policy
+from toolimit.learn.ppo import CHECKPOINT_STATE
+from toolimit.learn.task import TASK_NPZ, LearningTask, task_from_pipeline
+from toolimit.learn.training import (
+    LEARNING_JSON,
+    CloneRejected,
+    LearningConfig,
+    LearningOutcome,
+    learn_policy,
+    load_policy,
+)
 from toolimit.pipeline.settings import AlignSettings, EvaluationSettings, ExportSettings, TrajoptSettings
+from toolimit.pipeline.shortlist import (
+    CLONE_ATTEMPTS,
+    ShortlistEntry,
+    best_to_learn,
+    clone_reproduces,
+    read_shortlist,
+    shortlist_folder,
+    shortlist_in_learning_task,
+)
 from toolimit.robots import RobotModel, make_robot
 from toolimit.trajopt.problem import PoseTargets
 from toolimit.trajopt.result import TrackedScene, TrajectoryResult
@@ -48,6 +65,8 @@ from toolimit.workers import worker_count
 
 #: The evaluation record beside a policy (``toolimit evaluate``) and in a pipeline's folder.
 EVALUATION_JSON = "evaluation.json"
+#: The clones the learning stage set aside, and why (:func:`learn_stage`).
+CLONE_ATTEMPTS_JSON = "clone_attempts.json"
 
 
 def align_stage(
@@ -121,11 +140,14 @@ class TrajectoryStage:
         trajectory: the kept trajectory; ``trajectory.scene`` names its candidate.
         candidates: the alignment's candidates.
         selection: the robot's selection among them (None when ``select_by_robot`` is off).
+        shortlist: the best candidates by robot reward tracked in their learning tasks
+            (:mod:`toolimit.pipeline.shortlist`; empty when ``shortlist`` is 0 or without a selection).
     """
 
     trajectory: TrajectoryResult
     candidates: list[AlignedCandidate]
     selection: RobotSelection | None
+    shortlist: list[ShortlistEntry] = field(default_factory=list)
 
 
 def trajopt_stage(
@@ -138,8 +160,10 @@ def trajopt_stage(
     ray: RayTarget = False,
 ) -> TrajectoryStage:
     """Stage iii from an alignment folder: with ``settings.select_by_robot``, every candidate is
-    tracked by ``robot`` and replayed in its scene, and the one whose replay earns most is kept
-    (``out/selection.json`` lists them all); otherwise the best tool-only candidate is tracked.
+    tracked by ``robot`` and replayed in its scene, the ``settings.shortlist`` whose replays earn
+    most are tracked in their learning tasks, and the one whose tracking succeeds most often there
+    is kept (:mod:`toolimit.pipeline.shortlist`; with a shortlist of 0, the one whose replay earns
+    most; ``out/selection.json`` lists them all); otherwise the best tool-only candidate is tracked.
     Writes ``out/trajectory.npz``/``.json``, which record the candidate. ``ray``: the candidates
     tracked on a Ray cluster (:data:`~toolimit.distributed.RayTarget`). InputError when ``tool``
     is given and the alignment is another tool's; StageFoundNothing when no robot replay earns a
@@ -150,6 +174,7 @@ def trajopt_stage(
         raise InputError(f"the alignment in {alignment} is for the {aligned_tool}, not the {tool}")
     robot_model = make_robot(robot, tool=aligned_tool)
     selection = None
+    shortlist: list[ShortlistEntry] = []
     if settings.select_by_robot:
         selection = select_by_robot_execution(
             robot_model,
@@ -163,19 +188,41 @@ def trajopt_stage(
             workers=worker_count(settings.workers),
             ray=ray,
         )
-        save_json(out / SELECTION_JSON, selection.record(candidates))
+        record = selection.record(candidates)
         if selection.best is None:
+            save_json(out / SELECTION_JSON, record)
             raise StageFoundNothing(
                 f"no candidate's robot replay earned a goal reward (record: {out / SELECTION_JSON})"
             )
-        trajectory = selection.trajectories[selection.best]
-        assert trajectory is not None  # the best candidate was tracked
+        kept = selection.best
+        if settings.shortlist > 0:
+            shortlist = shortlist_in_learning_task(
+                selection,
+                candidates,
+                robot_model,
+                aligned_tool,
+                world,
+                settings.shortlist,
+                settings.shortlist_episodes,
+                settings.seed,
+                progress,
+            )
+            kept = best_to_learn(shortlist).candidate
+            record["shortlist"] = [entry.record() for entry in shortlist]
+            for entry in shortlist:  # the learner may fall back to any of them (learn_stage)
+                shortlisted = selection.trajectories[entry.candidate]
+                assert shortlisted is not None  # shortlisted candidates have a robot reward
+                shortlisted.save(shortlist_folder(out, entry.candidate))
+        record["kept"] = kept
+        save_json(out / SELECTION_JSON, record)
+        trajectory = selection.trajectories[kept]
+        assert trajectory is not None  # a candidate with a robot reward was tracked
     else:
         best = max(range(len(candidates)), key=lambda k: (candidates[k].alignment_reward, -k))
         tracked = _track(robot_model, candidates[best].targets, settings, progress)
         trajectory = replace(tracked, scene=TrackedScene(world, best, candidates[best].params))
     trajectory.save(out)
-    return TrajectoryStage(trajectory, candidates, selection)
+    return TrajectoryStage(trajectory, candidates, selection, shortlist)
 
 
 def trajopt_from_poses(
@@ -212,6 +259,11 @@ def describe_trajectory(stage: TrajectoryStage) -> list[str]:
                 lines.append(f"candidate {k}: refused ({selection.refusals[k]})")
             else:
                 lines.append(f"candidate {k}: robot replay reward {reward:.1f}; {trajectory.describe()}")
+        for entry in stage.shortlist:
+            lines.append(
+                f"shortlisted candidate {entry.candidate}, in the learning task ({entry.horizon} steps): tracking succeeds in "
+                f"{entry.success_rate:.0%} of the episodes, {entry.goal_reward_mean:.1f} goal reward"
+            )
     scene = stage.trajectory.scene
     assert scene is not None  # trajopt_stage records it
     reward = "" if selection is None else f", robot reward {selection.robot_rewards[scene.candidate]:.1f}"
@@ -231,8 +283,30 @@ def learn_stage(
 ) -> LearningOutcome:
     """Stage iv: the learning task of the trajectory in the scene it was tracked in
     (:func:`~toolimit.learn.task.task_from_pipeline`), learnt by cloning then PPO into ``out``
-    (resumed from its checkpoint)."""
-    task = task_from_pipeline(alignment, trajectory, seed=config.seed)
+    (resumed from its checkpoint).
+
+    With stage iii's shortlist (:mod:`toolimit.pipeline.shortlist`), the clone is checked before
+    PPO: where it does not reproduce its expert's success, the next shortlisted candidate is
+    cloned instead, up to :data:`CLONE_ATTEMPTS`, the last one learnt whatever its clone.
+    ``out/clone_attempts.json`` lists the clones set aside; ``task.npz`` names the candidate learnt."""
+    out = Path(out)
+    if (out / CHECKPOINT_STATE).is_file():  # PPO started: resume the candidate it started on
+        return learn_policy(LearningTask.load(out / TASK_NPZ), out, config, progress=progress)
+    folders = [Path(trajectory)]
+    if config.clone:  # without a clone (the baselines) there is nothing to check
+        folders += [
+            shortlist_folder(trajectory, entry.candidate) for entry in read_shortlist(trajectory)[1:CLONE_ATTEMPTS]
+        ]
+    attempts_path = out / CLONE_ATTEMPTS_JSON
+    attempts: list[dict[str, Any]] = json.loads(attempts_path.read_text()) if attempts_path.is_file() else []
+    for folder in folders[len(attempts) : -1]:
+        task = task_from_pipeline(alignment, folder, seed=config.seed)
+        try:
+            return learn_policy(task, out, config, progress=progress, accept_clone=clone_reproduces)
+        except CloneRejected as rejected:
+            attempts.append({"candidate": int(task.source["candidate"]), **rejected.record["clone_check"]})
+            save_json(attempts_path, attempts)
+    task = task_from_pipeline(alignment, folders[-1], seed=config.seed)
     return learn_policy(task, out, config, progress=progress)
 
 
