@@ -1,4 +1,5 @@
-"""The alignment search: sample, replay, keep the first K samples that earn a goal reward.
+"""The alignment search: sample, replay, keep the first K samples that earn a goal reward in at least
+``accept_replays`` of their replays.
 
 Every sample i draws from its own generator ``np.random.default_rng([seed, i])`` and resets the
 scene from it, so a sample's outcome depends only on (seed, i). Worker processes evaluate chunks
@@ -49,7 +50,8 @@ CHECKPOINT_EVERY_S = 5.0
 
 @dataclass(frozen=True)
 class Candidate:
-    """A sample whose replays earned a non-zero mean goal reward.
+    """A sample accepted by the search: at least ``config.accept_replays`` of its replays earned a goal
+    reward.
 
     Attributes:
         index: the sample's index (its generator is ``default_rng([seed, index])``).
@@ -76,9 +78,9 @@ class Rejected:
 
 
 @dataclass(frozen=True)
-class Unrewarded:
-    """A sample replayed without goal reward: ``replay_rewards`` (runs,) (the screening runs only, when
-    they earned nothing)."""
+class Unaccepted:
+    """A sample replayed but not accepted: fewer than ``config.accept_replays`` of its runs earned a
+    goal reward; ``replay_rewards`` (runs,) (the screening runs only, when they earned nothing)."""
 
     index: int
     replay_rewards: np.ndarray
@@ -89,7 +91,7 @@ class Unrewarded:
 
 
 #: What happened to one sample.
-SampleOutcome = Rejected | Unrewarded | Candidate
+SampleOutcome = Rejected | Unaccepted | Candidate
 
 
 @dataclass
@@ -235,16 +237,15 @@ class SampleEvaluator:
             if self.config.screen_replays > 0:
                 screened = replay(self.scene, sample.params, rng, poses, self.config.screen_replays)
                 if not np.any(screened != 0.0):
-                    return Unrewarded(index, screened)
+                    return Unaccepted(index, screened)
             trace: list[np.ndarray] = []  # (B,) goal rewards after each step, for a timed goal's cut
             record = (lambda _, scene: trace.append(np.array(scene.goal_reward()))) if is_timed(self.scene) else None
             rewards = replay(self.scene, sample.params, rng, poses, self.config.replays, on_step=record)
         except InvalidSceneParameters as error:
             return Rejected(index, str(error))
-        reward = float(np.mean(rewards))
-        if reward == 0.0:
-            return Unrewarded(index, rewards)
-        return Candidate(index, reward, rewards, sample, first_reward_cut(np.array(trace)) if trace else None)
+        if np.count_nonzero(rewards > 0.0) < self.config.accept_replays:
+            return Unaccepted(index, rewards)
+        return Candidate(index, float(np.mean(rewards)), rewards, sample, first_reward_cut(np.array(trace)) if trace else None)
 
     def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
         return [self.evaluate(index) for index in range(start, stop)]
