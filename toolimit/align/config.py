@@ -9,6 +9,8 @@ authors' code (kzorina/learning-from-video, ``method/I_alignment``):
   0.1 m found 50 candidates and 0.5 m found 9: wide offsets bury the blade (rejected) or lift it
   clear of the sand.
 * samples whose tool head goes more than 2 cm below the ground are rejected (``ground_tolerance``).
+* as in the authors' code, the tool alone moves within 1 m/s and 2 rad/s per world axis
+  (:func:`toolimit.scenes.replay.speed_limited`), and its reached poses are the robot's targets.
 * screening (``screen_replays``): one run first, the 10 runs only for a sample that earned a
   reward in it, as the authors' code does (the paper only says "10 times"); a sample is a
   candidate when at least 2 of the 10 runs earn a reward (``accept_replays``; the authors'

@@ -38,8 +38,8 @@ from toolimit.interrupts import Interrupted, interruptible
 from toolimit.progress import progress_bar
 from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
-from toolimit.scenes.replay import replay
-from toolimit.tools import ToolPose
+from toolimit.scenes.replay import replay, speed_limited
+from toolimit.tools import ToolPose, tool_spec
 from toolimit.workers import ordered_results
 
 SceneFactory = Callable[[], Scene]
@@ -146,9 +146,14 @@ class AlignmentResult:
         return apply_alignment_sample(self.demo, self.keypoints, candidate.sample)
 
     def episode_poses(self, candidate: Candidate) -> ToolPose:
-        """The tool poses of the candidate's episode, world frame: the aligned motion cut by the
-        authors' rule for a timed goal (``candidate.cut``), the whole of it otherwise."""
-        poses = self.aligned_motion(candidate)[2]
+        """The tool poses of the candidate's episode, world frame: the aligned motion as the tool
+        alone reached it in its replays (within the tool speed limit,
+        :func:`~toolimit.scenes.replay.speed_limited`; the authors kept these reached poses as the
+        robot's targets), cut by the authors' rule for a timed goal (``candidate.cut``), the whole
+        of it otherwise."""
+        poses = speed_limited(
+            self.aligned_motion(candidate)[2], 1.0 / self.demo.fps, tool_spec(self.tool).steered_offset
+        )
         if candidate.cut is None:
             return poses
         return ToolPose(candidate.cut.apply(poses.position), candidate.cut.apply(poses.rotation))
@@ -245,7 +250,9 @@ class SampleEvaluator:
             return Rejected(index, str(error))
         if np.count_nonzero(rewards > 0.0) < self.config.accept_replays:
             return Unaccepted(index, rewards)
-        return Candidate(index, float(np.mean(rewards)), rewards, sample, first_reward_cut(np.array(trace)) if trace else None)
+        return Candidate(
+            index, float(np.mean(rewards)), rewards, sample, first_reward_cut(np.array(trace)) if trace else None
+        )
 
     def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
         return [self.evaluate(index) for index in range(start, stop)]

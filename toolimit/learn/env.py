@@ -53,7 +53,9 @@ def observation_space(simulator: TaskSimulator) -> gym.spaces.Box:
     robot = simulator.robot
     box = np.full(2 * simulator.adr, WORLD_HALF_SIZE)
     low = np.concatenate([np.full(3, -TOOL_POSITION_BOUND), -np.ones(4), robot.lower, [0.0], -box])
-    high = np.concatenate([np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [simulator.horizon * simulator.dt], box])
+    high = np.concatenate(
+        [np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [simulator.horizon * simulator.dt], box]
+    )
     return gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
 
