@@ -40,7 +40,7 @@ SEED = 0
 #: Alignment: stop at the first sample that earns a reward in its one replay.
 #: The patch of the scythe's demonstration (m).
 PULL = {"grass_position": np.array([0.6, -0.3, 0.0])}
-TINY_ALIGNMENT = AlignmentConfig(samples=200, candidates=1, replays=1, screen_replays=0)
+TINY_ALIGNMENT = AlignmentConfig(samples=200, candidates=1, replays=1, accept_replays=1, screen_replays=0)
 #: Trajectory optimisation: one start from the held rest pose, two SQP iterations.
 TINY_TRACKING = TrackOptions(starts=1, sqp=SqpOptions(max_iterations=2), initialisations=("hold",))
 

@@ -76,7 +76,7 @@ def fresh_registry(monkeypatch):
 
 def test_built_in_tools_are_registered_in_the_papers_order_with_their_dimensions():
     assert list(TOOLS) == ["spade", "hammer", "scythe"]
-    assert TOOLS["hammer"] == ToolSpec("hammer", length=0.33, head_length=0.035, head_width=0.11, roll_symmetric=True)
+    assert TOOLS["hammer"] == ToolSpec("hammer", length=0.33, head_length=0.035, head_width=0.11, roll_symmetric=True, steered_point="head")
     assert tool_record("scythe").planar_plane == "xy" and tool_record("spade").planar_plane == "xz"
     assert tool_spec("spade") is tool_record("spade").spec
 

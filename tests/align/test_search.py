@@ -11,7 +11,7 @@ from align_fake_scene import FakeTargetScene, make_demo
 
 from toolimit.align.config import AlignmentConfig
 from toolimit.align.sampler import apply_alignment_sample, draw_alignment_sample
-from toolimit.align.search import align
+from toolimit.align.search import Candidate, Unaccepted, align
 
 # ground_tolerance 10 m: no sample is rejected for going below the ground unless a test asks.
 CONFIG = AlignmentConfig(samples=400, candidates=4, replays=5, chunk_size=16, element_std=0.05, ground_tolerance=10.0)
@@ -130,7 +130,7 @@ def test_screening_replays_only_rewarded_samples_in_full():
         )
         outcomes = [evaluator.evaluate(i) for i in range(60)]
         zero = [o for o in outcomes if o.reward == 0.0]
-        rewarded = [o for o in outcomes if o.reward > 0.0]
+        rewarded = [o for o in outcomes if isinstance(o, Candidate)]
         assert zero and rewarded and demo.n_frames == result.demo.n_frames
         assert {len(o.replay_rewards) for o in zero} <= runs_of_zero_reward
         assert min(len(o.replay_rewards) for o in zero) == min(runs_of_zero_reward)
@@ -204,3 +204,34 @@ def test_pose_targets_from_an_alignment_are_what_trajopt_reads(tmp_path):
     assert targets.fps == from_file.fps
     second = targets_from_alignment(result, result.candidates[1])
     assert not np.allclose(second.positions, targets.positions) or result.best is result.candidates[1]
+
+
+class RewardedInK(FakeTargetScene):
+    """Every run of one instance earns a reward; of a larger batch, exactly the first ``k`` instances."""
+
+    def __init__(self, k: int) -> None:
+        super().__init__()
+        self.k = k
+
+    def goal_reward(self) -> np.ndarray:
+        return (np.arange(self.batch_size) < (1 if self.batch_size == 1 else self.k)).astype(float)
+
+
+@pytest.mark.parametrize("k, accepted", [(0, False), (1, False), (2, True), (10, True)])
+def test_a_candidate_needs_a_reward_in_two_of_ten_replays(k, accepted):
+    """The authors' rule (``acceptable_success_n = 2`` of ``double_check_n = 10``)."""
+    from toolimit.align.search import SampleEvaluator
+
+    result = run()
+    config = AlignmentConfig(element_std=0.05, ground_tolerance=10.0)
+    assert (config.replays, config.accept_replays, config.screen_replays) == (10, 2, 1)
+    evaluator = SampleEvaluator(RewardedInK(k), result.demo, result.keypoints, config, "xz", result.min_distance, 3)
+    outcome = evaluator.evaluate(0)
+    assert isinstance(outcome, Candidate if accepted else Unaccepted)
+    assert np.count_nonzero(outcome.replay_rewards) == k and len(outcome.replay_rewards) == 10
+
+
+@pytest.mark.parametrize("accept", [0, 6])
+def test_accept_replays_must_lie_between_one_and_replays(accept):
+    with pytest.raises(ValueError, match="accept_replays"):
+        AlignmentConfig(replays=5, accept_replays=accept)

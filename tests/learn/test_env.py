@@ -41,7 +41,8 @@ def test_episode_truncates_at_the_horizon_and_reports_success(spade_task):
     for t in range(1, spade_task.horizon + 1):
         observation, reward, terminated, truncated, info = env.step(env.tracking_action())
         assert not terminated and truncated == (t == spade_task.horizon)
-        assert np.isclose(observation[-1], t / spade_task.horizon)
+        assert np.isclose(observation[-1], t * spade_task.control_dt)  # seconds, as the authors
+        assert env.observation_space.contains(observation)
     assert info["is_success"] is True and info["goal_reward"] >= 10
 
 

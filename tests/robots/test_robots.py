@@ -106,6 +106,22 @@ def test_tool_placement_override_is_relative_to_the_flange_parent_joint():
     np.testing.assert_allclose(data.oMf[panda.tool_frame_id].homogeneous, expected.homogeneous, atol=1e-12)
 
 
+@pytest.mark.parametrize(
+    "name, tool, height",
+    [("panda", "spade", -0.2), ("panda", "hammer", 0.0), ("panda", "scythe", 0.0), ("ur5", "spade", 0.0),
+     ("ur5", "hammer", 0.0), ("talos", "spade", 0.3)],
+)
+def test_base_heights_are_the_authors_per_robot_and_tool(name, tool, height):
+    """method/utils.py get_default_robot_z: the spade scene 0.2 m above the Panda's base, the UR5 on
+    the floor, Talos's pelvis 0.3 m above it; the tool rises with the base."""
+    robot = make_robot(name, tool=tool)
+    assert robot.base_height == pytest.approx(height)
+    on_floor = make_robot(name, tool=tool, base_height=0.0)
+    q = robot.q_neutral
+    np.testing.assert_allclose(robot.tool_pose(q, np.zeros(3))[0], on_floor.tool_pose(q, np.zeros(3))[0] + [0, 0, height],
+                               atol=1e-12)
+
+
 def test_base_moves_the_tool_rigidly_and_base_height_lifts_it(robot):
     rng = np.random.default_rng(1)
     q = _random_configuration(robot, rng)

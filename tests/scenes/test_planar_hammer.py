@@ -72,9 +72,10 @@ def test_a_deep_strike_plants_the_nail_within_the_window():
     np.testing.assert_array_equal(scene.goal_reward(), [1.0, 1.0])
     assert scene.travel() == pytest.approx([0.05, 0.05])
     assert scene.is_success().all()
-    # The head centre rests FACE_OFFSET above the face, 10 mm (0.06 - 0.05) below the nail's start:
-    # 45 mm above the planted nail's top.
-    assert scene.dense_reward() == pytest.approx(np.exp(-5.0 * (FACE_OFFSET - 0.01) ** 2))
+    # The face rests 60 mm below the nail's start, the planted nail's head centre 50 mm + half the
+    # head's thickness below it: the dense reward measures the distance between the two.
+    distance = 0.01 - scene.nail_head_thickness / 2
+    assert scene.dense_reward() == pytest.approx(np.exp(-5.0 * distance**2))
 
     late = PlanarHammerScene(success_window=0.2)  # planted at ~0.25 s: outside a 0.2 s window
     run(late, strike(3.0, 0.06))
@@ -82,8 +83,9 @@ def test_a_deep_strike_plants_the_nail_within_the_window():
 
 
 def test_dense_reward_grows_as_the_head_approaches_the_nail_in_the_x_z_plane():
-    """exp(-5 d^2), d the x-z distance from the head centre to the nail head's top; the head's y is
-    ignored (the plane's normal), the reward 0 before the first step."""
+    """exp(-5 d^2), d the x-z distance from the striking face (the authors' hammer tip) to the nail
+    head's centre (their nail body's origin); the head's y is ignored (the plane's normal), the
+    reward 0 before the first step."""
     scene = PlanarHammerScene()
     scene.reset({"nail_position": NAIL}, np.random.default_rng(0))
     assert scene.dense_reward()[0] == 0.0  # no hammer yet
@@ -91,7 +93,8 @@ def test_dense_reward_grows_as_the_head_approaches_the_nail_in_the_x_z_plane():
     for offset in ([0.3, 0.7, 0.4], [0.1, 0.7, 0.2], [0.0, 0.7, 0.1]):
         head = NAIL + np.array(offset)
         scene.step(tool_poses(head, head + np.array([0.33, 0.0, 0.0])))
-        assert scene.dense_reward()[0] == pytest.approx(np.exp(-5.0 * (offset[0] ** 2 + offset[2] ** 2)))
+        face_above_centre = offset[2] - FACE_OFFSET + scene.nail_head_thickness / 2  # tool x points down
+        assert scene.dense_reward()[0] == pytest.approx(np.exp(-5.0 * (offset[0] ** 2 + face_above_centre**2)))
         rewards.append(scene.dense_reward()[0])
     assert 0.0 < rewards[0] < rewards[1] < rewards[2] <= 1.0
 

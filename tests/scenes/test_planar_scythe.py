@@ -67,9 +67,10 @@ def test_scripted_pulls_cut_every_stalk_and_slow_or_high_ones_none():
         assert np.all((scene.dense_reward() > 0.0) & (scene.dense_reward() <= 0.1))  # shaping without cuts
 
 
-def test_dense_reward_grows_as_the_blade_root_approaches_the_stalks_in_the_x_y_plane():
-    """0.1 mean exp(-5 d^2), d the x-y distance from the blade root to a stalk; the root's height is
-    ignored (the plane's normal), the reward 0 before the first step."""
+def test_dense_reward_grows_as_the_head_point_approaches_the_patch_centre_in_the_x_y_plane():
+    """0.1 exp(-5 d^2), d the x-y distance from the head point (the authors' tip) to the patch's
+    centre (their one grass patch); the height is ignored (the plane's normal), the reward 0 before
+    the first step."""
     scene = PlanarScytheScene()
     scene.reset({"grass_position": GRASS}, np.random.default_rng(0), batch_size=2)
     np.testing.assert_array_equal(scene.dense_reward(), [0.0, 0.0])  # no scythe yet
@@ -77,8 +78,8 @@ def test_dense_reward_grows_as_the_blade_root_approaches_the_stalks_in_the_x_y_p
     for offset in ([-1.5, 0.5, 0.3], [-0.5, 0.2, 0.6], [0.0, 0.0, 0.05]):
         root = GRASS + np.array(offset)
         scene.step(tool_poses(root, root + np.array([0.0, 0.0, 1.0])))
-        expected = 0.1 * np.exp(-5.0 * np.sum((scene.stalks - root[:2]) ** 2, axis=-1)).mean(axis=1)
-        np.testing.assert_allclose(scene.dense_reward(), expected, rtol=1e-12)
+        expected = 0.1 * np.exp(-5.0 * np.sum((GRASS[:2] - root[:2]) ** 2))
+        np.testing.assert_allclose(scene.dense_reward(), [expected, expected], rtol=1e-12)
         rewards.append(scene.dense_reward())
     far, near, centre = rewards
     assert np.all((far > 0.0) & (far < near) & (near < centre) & (centre <= 0.1))

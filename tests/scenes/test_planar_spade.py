@@ -75,19 +75,19 @@ def test_scoop_carry_and_tip_fills_the_box_and_succeeds():
 
 
 def test_dense_reward_is_the_appendix_formula_in_the_x_z_plane():
-    """Mean over circles of exp(-5 |c - g|^2), g the box centre at circle-radius height, + 0.05
-    exp(-5 |tip - deposit floor centre|^2) once the spade is placed; x-z distances (y ignored)."""
+    """Mean over circles of exp(-5 |c - g|^2), g the box's floor centre, + 0.05 exp(-5 |handle end -
+    deposit floor centre|^2) once the spade is placed (the authors' points); x-z distances (y ignored)."""
     scene = PlanarSpadeScene()
     scene.reset(PARAMS, np.random.default_rng(0), batch_size=2)
-    goal = np.array([PARAMS["goal_position"][0], scene.sand.radius])
+    goal = np.array([PARAMS["goal_position"][0], 0.0])
 
     def sand_term() -> np.ndarray:
         return np.exp(-5.0 * np.sum((scene._sand - goal) ** 2, axis=-1)).mean(axis=1)
 
     np.testing.assert_allclose(scene.dense_reward(), sand_term(), rtol=1e-12)  # no spade yet: no tool term
     tip = np.array([0.1, 0.7, 0.5])  # above the pile, 0.1 m beside the deposit centre
-    scene.step(tool_poses(tip, tip + np.array([-0.4, 0.0, 0.0])))
-    tool_term = 0.05 * np.exp(-5.0 * (0.1**2 + 0.5**2))
+    scene.step(tool_poses(tip, tip + np.array([-0.4, 0.0, 0.0])))  # the handle end 0.4 m towards -x
+    tool_term = 0.05 * np.exp(-5.0 * ((0.1 - 0.4) ** 2 + 0.5**2))
     np.testing.assert_allclose(scene.dense_reward(), sand_term() + tool_term, rtol=1e-12)
     assert np.all((scene.dense_reward() >= 0.0) & (scene.dense_reward() <= 1.05))
 

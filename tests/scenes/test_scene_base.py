@@ -13,6 +13,7 @@ from toolimit.scenes.base import (
     dense_hammer_reward,
     dense_scythe_reward,
     dense_spade_reward,
+    dense_tool_point,
     parameter_violation,
     world_position,
 )
@@ -98,9 +99,18 @@ def test_dense_rewards_are_the_appendix_closeness_terms():
     origin, far = np.zeros((2, 3)), np.full((2, 3), 100.0)
     assert dense_hammer_reward(None, far).tolist() == [0.0, 0.0]
     assert dense_hammer_reward(origin, origin).tolist() == [1.0, 1.0]
-    stalks = np.zeros((2, 5, 3))
-    assert dense_scythe_reward(None, stalks).tolist() == [0.0, 0.0]
-    np.testing.assert_allclose(dense_scythe_reward(origin, stalks), 0.1)
+    patch = np.zeros((2, 3))
+    assert dense_scythe_reward(None, patch).tolist() == [0.0, 0.0]
+    np.testing.assert_allclose(dense_scythe_reward(origin, patch), 0.1)
+    np.testing.assert_allclose(dense_scythe_reward(np.array([[0.0, 0.0, 0.3]] * 2), patch), 0.1 * np.exp(-5 * 0.09))
     grains, goal = np.zeros((2, 4, 2)), np.zeros((2, 1, 2))
     np.testing.assert_allclose(dense_spade_reward(grains, goal, None, np.zeros(2)), 1.0)
     np.testing.assert_allclose(dense_spade_reward(grains, goal, np.zeros((2, 2)), np.zeros(2)), 1.05)
+
+
+def test_dense_tool_points_are_the_authors():
+    """pyphysx_envs: the spade's body origin (the handle end), the hammer's tip (the striking face),
+    the scythe's tip (the head point)."""
+    np.testing.assert_allclose(dense_tool_point("spade"), [0.0, 0.0, 0.40])
+    np.testing.assert_allclose(dense_tool_point("hammer"), [0.055, 0.0, 0.0])
+    np.testing.assert_allclose(dense_tool_point("scythe"), [0.0, 0.0, 0.0])

@@ -136,20 +136,24 @@ def test_batched_instances_are_independent_and_deterministic():
         np.testing.assert_array_equal(a, b)
 
 
-def test_dense_reward_is_the_closeness_of_the_head_to_the_nail_top_where_it_is_now():
-    """exp(-5 d^2), d from the head centre (tool origin) to the nail head's top centre; 0 unplaced."""
+def test_dense_reward_is_the_closeness_of_the_face_to_the_nail_head_where_it_is_now():
+    """exp(-5 d^2), d from the striking face (the authors' hammer tip) to the nail head's centre
+    (their nail body's origin); 0 unplaced."""
     scene = fresh()
     assert scene.dense_reward()[0] == 0.0  # no hammer yet
+    half_plate = scene.plate_thickness / 2
     scene.step(ToolPose(NAIL + [0.0, 0.0, 0.5], FACE_DOWN))
     far = scene.dense_reward()[0]
     scene.step(ToolPose(NAIL + [0.0, 0.0, 0.1], FACE_DOWN))
     near = scene.dense_reward()[0]
-    assert far == pytest.approx(np.exp(-5.0 * 0.5**2)) and near == pytest.approx(np.exp(-5.0 * 0.1**2))
+    assert far == pytest.approx(np.exp(-5.0 * (0.5 - FACE_OFFSET + half_plate) ** 2))
+    assert near == pytest.approx(np.exp(-5.0 * (0.1 - FACE_OFFSET + half_plate) ** 2))
     assert 0.0 < far < near <= 1.0
     travel = strike(scene, 3.0)
     assert travel > 0.01
-    offset = np.array([0.1, -0.2, 0.3])  # from the driven nail's top
-    scene.step(ToolPose(np.array([*NAIL[:2], scene.nail_top[0]]) + offset, FACE_DOWN))
+    offset = np.array([0.1, -0.2, 0.3])  # of the face from the driven nail's head centre
+    centre = np.array([*NAIL[:2], scene.nail_top[0] - half_plate])
+    scene.step(ToolPose(centre + offset + [0.0, 0.0, FACE_OFFSET], FACE_DOWN))
     assert scene.dense_reward()[0] == pytest.approx(np.exp(-5.0 * np.sum(offset**2)))
 
 

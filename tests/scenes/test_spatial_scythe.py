@@ -128,18 +128,17 @@ def test_same_seed_same_rewards():
         np.testing.assert_array_equal(a, b)
 
 
-def test_dense_reward_grows_as_the_blade_root_approaches_the_stalks():
-    """0.1 mean exp(-5 d^2), d from the blade root (tool origin) to the stalks at half the cutting
-    height; 0 before the first step."""
+def test_dense_reward_grows_as_the_head_point_approaches_the_patch_centre():
+    """0.1 exp(-5 d^2), d from the head point (tool origin, the authors' tip) to the patch's centre
+    on the ground (their one grass patch); 0 before the first step."""
     scene = fresh(batch_size=2)
     np.testing.assert_array_equal(scene.dense_reward(), [0.0, 0.0])  # no scythe yet
     rewards = []
     for offset in ([-0.2, -2.0, 0.05], [-0.2, -0.3, 0.05], [0.0, 0.0, 0.05]):
         root = PATCH + offset
         scene.step(ToolPose(root, LEVEL))
-        stalk_points = np.concatenate([scene.stalks_xy, np.full((2, scene.n_stalks, 1), 0.05)], axis=-1)
-        expected = 0.1 * np.exp(-5.0 * np.sum((stalk_points - root) ** 2, axis=-1)).mean(axis=1)
-        np.testing.assert_allclose(scene.dense_reward(), expected, rtol=1e-12)
+        expected = 0.1 * np.exp(-5.0 * np.sum((root - [PATCH[0], PATCH[1], 0.0]) ** 2))
+        np.testing.assert_allclose(scene.dense_reward(), [expected, expected], rtol=1e-12)
         rewards.append(scene.dense_reward())
     far, near, centre = rewards
     assert np.all((far > 0.0) & (far < near) & (near < centre) & (centre <= 0.1))

@@ -142,13 +142,15 @@ def test_success_needs_ten_spheres_for_half_of_the_steps(scooped: SpatialSpadeSc
     assert scooped.success_tracker.successful_steps[0] >= scooped.success_tracker.steps / 2
 
 
-def appendix_spade_reward(scene: SpatialSpadeScene, tool_position: np.ndarray | None) -> np.ndarray:
-    """(B,) the appendix's spade reward written out: mean over spheres of exp(-5 |c - g|^2), g the
-    box centre at sphere-radius height, + 0.05 exp(-5 |tip - deposit floor centre|^2) once placed."""
-    goal = PARAMS["goal_position"] + np.array([0.0, 0.0, scene.material.radius])
+def appendix_spade_reward(scene: SpatialSpadeScene, tool_pose: ToolPose | None) -> np.ndarray:
+    """(B,) the authors' dense spade reward written out: mean over spheres of exp(-5 |c - g|^2), g the
+    box's floor centre, + 0.05 exp(-5 |handle end - deposit floor centre|^2) once placed (the handle
+    end 0.40 m up the tool's z from the blade tip: their spade body's origin)."""
+    goal = PARAMS["goal_position"]
     reward = np.exp(-5.0 * np.sum((scene.sphere_positions - goal) ** 2, axis=-1)).mean(axis=1)
-    if tool_position is not None:
-        reward += 0.05 * np.exp(-5.0 * np.sum((tool_position - PARAMS["sand_position"]) ** 2, axis=-1))
+    if tool_pose is not None:
+        handle_end = tool_pose.position + 0.40 * tool_pose.rotation[..., :, 2]
+        reward += 0.05 * np.exp(-5.0 * np.sum((handle_end - PARAMS["sand_position"]) ** 2, axis=-1))
     return reward
 
 
@@ -160,24 +162,25 @@ def test_dense_reward_before_the_first_step_is_the_sand_term_alone() -> None:
     assert np.all((dense > 0.0) & (dense < 0.01)), "the sand is about 1.1 m from the box"
 
 
-def test_dense_reward_adds_the_tool_term_for_the_blade_tip_near_the_deposit() -> None:
-    """Instance 0's tip 0.5 m above the deposit's floor centre (term 0.05 exp(-1.25)), instance 1's
-    far away (term ~0); neither touches the sand."""
+def test_dense_reward_adds_the_tool_term_for_the_handle_end_near_the_deposit() -> None:
+    """Instance 0's tip 0.5 m above the deposit's floor centre, its handle end 0.9 m (term
+    0.05 exp(-4.05)), instance 1's far away (term ~0); neither touches the sand."""
     scene = SpatialSpadeScene()
     scene.reset(PARAMS, np.random.default_rng(0), batch_size=2)
     above = PARAMS["sand_position"] + np.array([0.0, 0.0, 0.5])
     tips = np.stack([above, FAR_AWAY.position])
-    scene.step(ToolPose(tips, np.repeat(np.eye(3)[None], 2, 0)))
+    pose = ToolPose(tips, np.repeat(np.eye(3)[None], 2, 0))
+    scene.step(pose)
     dense = scene.dense_reward()
-    np.testing.assert_allclose(dense, appendix_spade_reward(scene, tips), rtol=1e-12)
+    np.testing.assert_allclose(dense, appendix_spade_reward(scene, pose), rtol=1e-12)
     tool_term = dense - appendix_spade_reward(scene, None)
-    assert tool_term == pytest.approx([0.05 * np.exp(-1.25), 0.0], abs=1e-9)
+    assert tool_term == pytest.approx([0.05 * np.exp(-5.0 * 0.9**2), 0.0], abs=1e-9)
 
 
 def test_dense_reward_rises_with_the_sand_moved_into_the_box(scooped: SpatialSpadeScene) -> None:
     """The scooped instances against unscooped ones with the spade at the same pose (same tool term)."""
     dense = scooped.dense_reward()
-    np.testing.assert_allclose(dense, appendix_spade_reward(scooped, scooped.tool_pose.position), rtol=1e-12)
+    np.testing.assert_allclose(dense, appendix_spade_reward(scooped, scooped.tool_pose), rtol=1e-12)
     assert np.all((dense >= 0.0) & (dense <= 1.05))
     unscooped = SpatialSpadeScene()
     unscooped.reset(PARAMS, np.random.default_rng(0), batch_size=2)

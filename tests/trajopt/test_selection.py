@@ -31,7 +31,7 @@ def test_candidates_file_holds_every_candidate(spade_alignment):
     assert (tool, world) == ("spade", "planar")
     assert [c.alignment_reward for c in candidates] == [c.reward for c in result.candidates]
     for loaded, candidate in zip(candidates, result.candidates):
-        _, _, poses = result.aligned_motion(candidate)
+        poses = result.episode_poses(candidate)  # the poses the speed-limited tool reached
         assert np.allclose(loaded.targets.positions, poses.position)
         assert np.allclose(loaded.targets.rotations, poses.rotation, atol=1e-9)
         assert np.allclose(loaded.params["goal_position"], candidate.sample.params["goal_position"])

@@ -25,7 +25,7 @@ def strike_demo() -> ToolDemo:
 
 @pytest.fixture(scope="module")
 def result():
-    config = AlignmentConfig(samples=200, candidates=1, replays=1)
+    config = AlignmentConfig(samples=200, candidates=1, replays=1, accept_replays=1)
     return align(strike_demo(), "hammer", "3d", config, seed=0, progress=False, clean=False)  # exact by construction
 
 

@@ -9,8 +9,12 @@ authors' code (kzorina/learning-from-video, ``method/I_alignment``):
   0.1 m found 50 candidates and 0.5 m found 9: wide offsets bury the blade (rejected) or lift it
   clear of the sand.
 * samples whose tool head goes more than 2 cm below the ground are rejected (``ground_tolerance``).
+* as in the authors' code, the tool alone moves within 1 m/s and 2 rad/s per world axis
+  (:func:`toolimit.scenes.replay.speed_limited`), and its reached poses are the robot's targets.
 * screening (``screen_replays``): one run first, the 10 runs only for a sample that earned a
-  reward in it, as the authors' code does (the paper only says "10 times").
+  reward in it, as the authors' code does (the paper only says "10 times"); a sample is a
+  candidate when at least 2 of the 10 runs earn a reward (``accept_replays``; the authors'
+  ``acceptable_success_n``, ``method/I_alignment/main.py``).
 * the trajectory scale shrinks the motion about the ground point under the head path's centroid
   (the authors' code scaled about the demonstrator's feet), so the ground stays the ground.
 """
@@ -53,9 +57,12 @@ class AlignmentConfig:
 
     Attributes:
         samples: at most this many samples are tried (paper: 20,000).
-        candidates: the search stops at the first K samples with a non-zero mean goal reward.
+        candidates: the search stops at the first K accepted samples (``accept_replays``).
         replays: each sample's trajectory is executed this many times (scene randomness), the goal
             reward is averaged (paper: 10).
+        accept_replays: a sample is accepted as a candidate when at least this many of its
+            ``replays`` runs earn a goal reward (the authors' code: 2 of 10; one lucky run of ten
+            is not enough).
         screen_replays: if > 0, a sample is first replayed this many times and only one that
             earns a reward there gets the ``replays`` runs whose mean decides (the original code
             screens with one run, then checks with 10); 0 replays every sample ``replays`` times.
@@ -82,6 +89,7 @@ class AlignmentConfig:
     samples: int = 20_000
     candidates: int = 5
     replays: int = 10
+    accept_replays: int = 2
     screen_replays: int = 1
     scales: tuple[float, ...] = (0.5, 0.75, 1.0)
     z_offset_std: float = 0.1
@@ -96,6 +104,10 @@ class AlignmentConfig:
             value = getattr(self, name)
             if not (isinstance(value, (int, np.integer)) and value > 0):
                 raise InvalidSetting(name, f"expected a positive integer, got {value!r}")
+        if not (isinstance(self.accept_replays, (int, np.integer)) and 1 <= self.accept_replays <= self.replays):
+            raise InvalidSetting(
+                "accept_replays", f"expected an integer from 1 to replays ({self.replays}), got {self.accept_replays!r}"
+            )
         if not (isinstance(self.screen_replays, (int, np.integer)) and self.screen_replays >= 0):
             raise InvalidSetting("screen_replays", f"expected a non-negative integer, got {self.screen_replays!r}")
         for name in ("z_offset_std", "element_std", "ground_tolerance"):

@@ -1,4 +1,5 @@
-"""The alignment search: sample, replay, keep the first K samples that earn a goal reward.
+"""The alignment search: sample, replay, keep the first K samples that earn a goal reward in at least
+``accept_replays`` of their replays.
 
 Every sample i draws from its own generator ``np.random.default_rng([seed, i])`` and resets the
 scene from it, so a sample's outcome depends only on (seed, i). Worker processes evaluate chunks
@@ -37,8 +38,8 @@ from toolimit.interrupts import Interrupted, interruptible
 from toolimit.progress import progress_bar
 from toolimit.scenes.base import ParameterSpec, Scene
 from toolimit.scenes.registry import make_scene
-from toolimit.scenes.replay import replay
-from toolimit.tools import ToolPose
+from toolimit.scenes.replay import replay, speed_limited
+from toolimit.tools import ToolPose, tool_spec
 from toolimit.workers import ordered_results
 
 SceneFactory = Callable[[], Scene]
@@ -49,7 +50,8 @@ CHECKPOINT_EVERY_S = 5.0
 
 @dataclass(frozen=True)
 class Candidate:
-    """A sample whose replays earned a non-zero mean goal reward.
+    """A sample accepted by the search: at least ``config.accept_replays`` of its replays earned a goal
+    reward.
 
     Attributes:
         index: the sample's index (its generator is ``default_rng([seed, index])``).
@@ -76,9 +78,9 @@ class Rejected:
 
 
 @dataclass(frozen=True)
-class Unrewarded:
-    """A sample replayed without goal reward: ``replay_rewards`` (runs,) (the screening runs only, when
-    they earned nothing)."""
+class Unaccepted:
+    """A sample replayed but not accepted: fewer than ``config.accept_replays`` of its runs earned a
+    goal reward; ``replay_rewards`` (runs,) (the screening runs only, when they earned nothing)."""
 
     index: int
     replay_rewards: np.ndarray
@@ -89,7 +91,7 @@ class Unrewarded:
 
 
 #: What happened to one sample.
-SampleOutcome = Rejected | Unrewarded | Candidate
+SampleOutcome = Rejected | Unaccepted | Candidate
 
 
 @dataclass
@@ -144,9 +146,14 @@ class AlignmentResult:
         return apply_alignment_sample(self.demo, self.keypoints, candidate.sample)
 
     def episode_poses(self, candidate: Candidate) -> ToolPose:
-        """The tool poses of the candidate's episode, world frame: the aligned motion cut by the
-        authors' rule for a timed goal (``candidate.cut``), the whole of it otherwise."""
-        poses = self.aligned_motion(candidate)[2]
+        """The tool poses of the candidate's episode, world frame: the aligned motion as the tool
+        alone reached it in its replays (within the tool speed limit,
+        :func:`~toolimit.scenes.replay.speed_limited`; the authors kept these reached poses as the
+        robot's targets), cut by the authors' rule for a timed goal (``candidate.cut``), the whole
+        of it otherwise."""
+        poses = speed_limited(
+            self.aligned_motion(candidate)[2], 1.0 / self.demo.fps, tool_spec(self.tool).steered_offset
+        )
         if candidate.cut is None:
             return poses
         return ToolPose(candidate.cut.apply(poses.position), candidate.cut.apply(poses.rotation))
@@ -235,16 +242,17 @@ class SampleEvaluator:
             if self.config.screen_replays > 0:
                 screened = replay(self.scene, sample.params, rng, poses, self.config.screen_replays)
                 if not np.any(screened != 0.0):
-                    return Unrewarded(index, screened)
+                    return Unaccepted(index, screened)
             trace: list[np.ndarray] = []  # (B,) goal rewards after each step, for a timed goal's cut
             record = (lambda _, scene: trace.append(np.array(scene.goal_reward()))) if is_timed(self.scene) else None
             rewards = replay(self.scene, sample.params, rng, poses, self.config.replays, on_step=record)
         except InvalidSceneParameters as error:
             return Rejected(index, str(error))
-        reward = float(np.mean(rewards))
-        if reward == 0.0:
-            return Unrewarded(index, rewards)
-        return Candidate(index, reward, rewards, sample, first_reward_cut(np.array(trace)) if trace else None)
+        if np.count_nonzero(rewards > 0.0) < self.config.accept_replays:
+            return Unaccepted(index, rewards)
+        return Candidate(
+            index, float(np.mean(rewards)), rewards, sample, first_reward_cut(np.array(trace)) if trace else None
+        )
 
     def evaluate_range(self, start: int, stop: int) -> list[SampleOutcome]:
         return [self.evaluate(index) for index in range(start, stop)]

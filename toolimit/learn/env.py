@@ -48,12 +48,14 @@ TOOL_POSITION_BOUND = 10.0
 
 def observation_space(simulator: TaskSimulator) -> gym.spaces.Box:
     """float32 box: tool position within +-TOOL_POSITION_BOUND m, quaternion in [-1, 1], joints
-    within their limits (rad), time fraction in [0, 1] (, goal box x, y within the world's
+    within their limits (rad), elapsed time in [0, H dt] s (, goal box x, y within the world's
     +-WORLD_HALF_SIZE m under ADR)."""
     robot = simulator.robot
     box = np.full(2 * simulator.adr, WORLD_HALF_SIZE)
     low = np.concatenate([np.full(3, -TOOL_POSITION_BOUND), -np.ones(4), robot.lower, [0.0], -box])
-    high = np.concatenate([np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [1.0], box])
+    high = np.concatenate(
+        [np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [simulator.horizon * simulator.dt], box]
+    )
     return gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
 

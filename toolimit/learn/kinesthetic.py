@@ -70,7 +70,9 @@ def kinesthetic_task(
         return LearningTask.load(folder / TASK_NPZ)
     scene = make_scene(task.tool, task.world)
     motion = scripted_motion(task.tool, task.world, task.params, fps=1.0 / scene.control_dt)
-    tool_rewards = replay(scene, task.params, np.random.default_rng(seed), motion, batch_size=replays)
+    # a kinesthetic demonstration is the robot's own motion, the targets it tracks: replayed as given
+    # (the tool speed limit is the alignment's tool-alone replay, toolimit.scenes.replay)
+    tool_rewards = replay(scene, task.params, np.random.default_rng(seed), motion, batch_size=replays, tool_alone=False)
     candidate = AlignedCandidate(
         PoseTargets(motion.position, motion.rotation, 1.0 / scene.control_dt), task.params, float(tool_rewards.mean())
     )

@@ -8,9 +8,9 @@ class, so there is one definition of observation, action and reward.
 
 Observation (float32, per instance), the paper's state:
   tool position (3, m, world frame), tool quaternion (4, w first, world from tool, sign kept
-  continuous along the episode), joint positions (N, rad), time (1): elapsed fraction t / H of the
-  episode. The authors observed the time in seconds; the fraction keeps every entry of order one
-  (SB3 recommends normalised observations) and carries the same information for a fixed H.
+  continuous along the episode), joint positions (N, rad), time (1): elapsed time t * dt since the
+  reset, seconds, as the authors observed it (pyphysx_envs ``RobotEnv.get_obs``: the scene's
+  simulation time).
   With ``adr=True`` (domain randomisation of the goal box, :mod:`toolimit.learn.adr`; spades only)
   two more entries follow: the goal box's position x, y (m, world frame) in this instance, so D =
   3 + 4 + N + 1 + 2.
@@ -220,8 +220,9 @@ class TaskSimulator:
         self._position, self._rotation, self._quaternion = positions, rotations, quaternion
 
     def observation(self) -> np.ndarray:
-        """(B, D) float32: tool position, quaternion (w first), joints, time fraction (, goal box x, y)."""
-        time = np.full((self.batch_size, 1), self.t / self.horizon)
+        """(B, D) float32: tool position, quaternion (w first), joints, elapsed time t * dt in s (,
+        goal box x, y)."""
+        time = np.full((self.batch_size, 1), self.t * self.dt)
         parts = [self._position, self._quaternion, self.q, time] + [self.box_positions] * self.adr
         return np.concatenate(parts, axis=1).astype(np.float32)
 

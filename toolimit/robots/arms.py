@@ -10,9 +10,12 @@ Mount frames (z = approach direction, along the held tool; see :mod:`toolimit.ro
   floor; only x moves (y and yaw fixed at 0, so the arm stays in its plane).
 * ``panda``: example-robot-data's Panda, fingers locked (``pin.buildReducedModel``). Flange
   ``panda_link8`` (0.107 m beyond joint 7), approach = its z axis. Rest pose =
-  example-robot-data's q0 (fingers dropped). Base on the floor (base_height 0), as in PROBLEM.md.
+  example-robot-data's q0 (fingers dropped). Base on the floor (base_height 0, as in PROBLEM.md),
+  except with the spade, whose scene stands 0.2 m above the base (base_height -0.2), as the
+  authors placed it (``method/utils.py get_default_robot_z``: -0.2 for the Panda with the spade).
 * ``ur5``: example-robot-data's UR5. Flange ``tool0``, approach = its z axis. Rest pose
-  (0, -1.57, 1.57, -1.57, -1.57, 0) (elbow up, wrist pointing down). Base on a 0.4 m pedestal.
+  (0, -1.57, 1.57, -1.57, -1.57, 0) (elbow up, wrist pointing down). Base on the scene's floor
+  (``get_default_robot_z``: 0).
 * ``talos``: example-robot-data's full Talos reduced to its upper body as the authors built it
   (pyphysx_envs ``robot/talos_arm.py``): free-flyer, legs, left arm, head and both grippers locked
   at q0 (free-flyer at the origin); active: torso 1-2 (yaw, pitch), right arm 1-7 and a tool-roll
@@ -37,7 +40,9 @@ PLANAR3_LINKS = (0.40, 0.35, 0.25)
 PLANAR3_JOINT_LIMIT = 2.6
 PLANAR3_VELOCITY_LIMIT = 2.5
 PLANAR3_BASE_HEIGHT = 0.5
-UR5_BASE_HEIGHT = 0.4
+#: The Panda's base with the spade: 0.2 m below the scene's floor (the authors' get_default_robot_z).
+PANDA_SPADE_BASE_HEIGHT = -0.2
+UR5_BASE_HEIGHT = 0.0
 UR5_NEUTRAL = (0.0, -1.57, 1.57, -1.57, -1.57, 0.0)
 #: Talos's pelvis above the scene's floor, m (the authors' ``get_default_robot_z``).
 TALOS_BASE_HEIGHT = 0.3
@@ -110,11 +115,12 @@ def panda() -> ArmDescription:
         mount_rotation=np.eye(3),
         q_neutral=np.array(robot.q0[:7], dtype=float),
         base_height=0.0,
+        tool_base_heights={"spade": PANDA_SPADE_BASE_HEIGHT},
     )
 
 
 def ur5() -> ArmDescription:
-    """example-robot-data's UR5 on a pedestal."""
+    """example-robot-data's UR5, its base on the scene's floor."""
     robot = _load_example_robot("ur5")
     return ArmDescription(
         name="ur5",

@@ -22,6 +22,7 @@ Frames and coordinates (every array in SI units: metres, radians, rad/s):
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,6 +53,9 @@ class ArmDescription:
         q_neutral: (N,) rest configuration, radians; the start q_0 of trajectory optimisation.
         base_height: height of the arm's universe frame above the floor, metres.
         base_dofs: (3,) bool, which of (x, y, yaw) the base may move.
+        tool_base_heights: tool name -> the base height (m) when holding that tool, replacing
+            ``base_height`` (the authors set the height per robot and tool); negative: the base
+            stands below the scene's floor (the scene on a platform).
     """
 
     name: str
@@ -61,6 +65,11 @@ class ArmDescription:
     q_neutral: np.ndarray
     base_height: float
     base_dofs: tuple[bool, bool, bool] = (True, True, True)
+    tool_base_heights: Mapping[str, float] = field(default_factory=dict)
+
+    def base_height_for(self, tool: str) -> float:
+        """The base height (m above the scene's floor) when holding ``tool``."""
+        return float(self.tool_base_heights.get(tool, self.base_height))
 
 
 def default_tool_placement(arm: ArmDescription, tool: ToolSpec) -> pin.SE3:
@@ -191,7 +200,7 @@ def build_robot_model(
     tool_frame_id = arm_model.addFrame(
         pin.Frame(TOOL_FRAME, flange.parentJoint, flange_id, placement, pin.FrameType.OP_FRAME)
     )
-    height = arm.base_height if base_height is None else float(base_height)
+    height = arm.base_height_for(tool.name) if base_height is None else float(base_height)
     if not np.isfinite(height):
         raise ValueError(f"base_height must be finite, got {base_height}")
 

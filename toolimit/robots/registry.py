@@ -53,7 +53,8 @@ def make_robot(
         tool_placement: tool frame relative to the joint that carries the flange (a Pinocchio
             ``Frame.placement``), replacing the default mounting (handle end at the flange, tool
             along the approach axis; see :mod:`toolimit.robots.model`).
-        base_height: height of the base above the floor (m), replacing the robot's default.
+        base_height: height of the base above the floor (m), replacing the robot's default for
+            ``tool`` (:meth:`~toolimit.robots.model.ArmDescription.base_height_for`).
     """
     if name not in _BUILDERS:
         raise InputError(f"unknown robot {name!r}; known robots: {', '.join(ROBOTS)}")

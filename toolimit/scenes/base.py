@@ -20,7 +20,7 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 
 from toolimit.errors import InvalidSceneParameters
-from toolimit.tools import ToolPose
+from toolimit.tools import ToolPose, tool_spec
 
 #: Control rate of the paper: scenes step the tool at this rate and sub-step their physics.
 CONTROL_FPS = 24.0
@@ -60,9 +60,23 @@ def unpack_scene_params(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarra
 #: length scale 1 / sqrt(b) of about 0.32 m.
 DENSE_REWARD_B = 10.0
 #: The appendix's weights: of the spade's tool-to-deposit term (its sand term has weight 1) and of
-#: the scythe's mean tool-to-stalk term.
+#: the scythe's tool-to-patch term.
 DENSE_SPADE_TOOL_WEIGHT = 0.05
 DENSE_SCYTHE_WEIGHT = 0.1
+
+
+def dense_tool_point(tool: str) -> np.ndarray:
+    """(3,) the tool-frame point (m) whose distance the dense reward of ``tool`` measures, the point
+    of the authors' code (pyphysx_envs ``scenes/*TaskScene.py``): the spade's handle end (their
+    spade body's origin, ``tool.get_global_pose()``), the hammer's striking face (their hammer's
+    ``to_tip_transform``: the head's end along its striking axis), the scythe's head point (their
+    scythe's tip, on the snath at the blade's mid-width); the head point for another tool."""
+    spec = tool_spec(tool)
+    if tool == "spade":
+        return np.array([0.0, 0.0, spec.length])
+    if tool == "hammer":
+        return np.array([spec.head_width / 2.0, 0.0, 0.0])
+    return np.zeros(3)
 
 
 @dataclass(frozen=True)
@@ -167,10 +181,11 @@ class Scene(Protocol):
         scythe: stalks cut)."""
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) dense shaping reward of the paper's appendix, for the dense-reward baseline: sums
-        of :func:`gaussian_closeness` terms (:func:`dense_spade_reward` in [0, 1.05],
-        :func:`dense_hammer_reward` [0, 1], :func:`dense_scythe_reward` [0, 0.1]), per step, not
-        divided by the horizon (the learning environment does that)."""
+        """(B,) dense shaping reward of the paper's appendix as the authors' code has it, for the
+        dense-reward baseline: sums of :func:`gaussian_closeness` terms (:func:`dense_spade_reward`
+        in [0, 1.05], :func:`dense_hammer_reward` [0, 1], :func:`dense_scythe_reward` [0, 0.1]) on
+        the tool's :func:`dense_tool_point`, per step, not divided by the horizon (the learning
+        environment does that)."""
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: the paper's success test over the steps so far (see docs/method.md#success-criteria)."""
@@ -249,54 +264,56 @@ def gaussian_closeness(distance_squared: np.ndarray) -> np.ndarray:
     return np.exp(-0.5 * DENSE_REWARD_B * np.asarray(distance_squared, dtype=float))
 
 
-def dense_hammer_reward(tool_origin: np.ndarray | None, nail_top: np.ndarray) -> np.ndarray:
-    """(B,) the appendix's hammer shaping, in [0, 1]: the closeness of the tool frame origin (the
-    hammer head's centre) to the nail head's top centre; 0 before the hammer is placed.
+def dense_hammer_reward(tool_point: np.ndarray | None, nail_head: np.ndarray) -> np.ndarray:
+    """(B,) the appendix's hammer shaping, in [0, 1]: the closeness of the hammer's striking face
+    (:func:`dense_tool_point`) to the nail head's centre (the authors' nail body's origin); 0
+    before the hammer is placed.
 
     Args:
-        tool_origin: (B, D) tool frame origins, None before the first step.
-        nail_top: (B, D) nail head top centres where the nails are now.
+        tool_point: (B, D) striking face centres, None before the first step.
+        nail_head: (B, D) nail head centres where the nails are now.
         Both in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
     """
-    if tool_origin is None:
-        return np.zeros(len(nail_top))
-    return gaussian_closeness(np.sum((tool_origin - nail_top) ** 2, axis=-1))
+    if tool_point is None:
+        return np.zeros(len(nail_head))
+    return gaussian_closeness(np.sum((tool_point - nail_head) ** 2, axis=-1))
 
 
-def dense_scythe_reward(tool_origin: np.ndarray | None, stalks: np.ndarray) -> np.ndarray:
-    """(B,) the appendix's scythe shaping, in [0, 0.1]: :data:`DENSE_SCYTHE_WEIGHT` times the mean
-    over all stalks (cut or not) of the closeness of the tool frame origin (the blade root) to a
-    stalk's point; 0 before the scythe is placed.
+def dense_scythe_reward(tool_point: np.ndarray | None, patch: np.ndarray) -> np.ndarray:
+    """(B,) the appendix's scythe shaping, in [0, 0.1]: :data:`DENSE_SCYTHE_WEIGHT` times the
+    closeness of the scythe's head point (:func:`dense_tool_point`) to the grass patch's centre on
+    the ground (the authors' mean over their one patch); 0 before the scythe is placed.
 
     Args:
-        tool_origin: (B, D) tool frame origins, None before the first step.
-        stalks: (B, N, D) one point of each stalk.
+        tool_point: (B, D) head points, None before the first step.
+        patch: (B, D) the patch's centre, per instance.
         Both in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
     """
-    if tool_origin is None:
-        return np.zeros(len(stalks))
-    closeness = gaussian_closeness(np.sum((stalks - tool_origin[:, None, :]) ** 2, axis=-1))
-    return DENSE_SCYTHE_WEIGHT * closeness.mean(axis=1)
+    if tool_point is None:
+        return np.zeros(len(patch))
+    return DENSE_SCYTHE_WEIGHT * gaussian_closeness(np.sum((tool_point - patch) ** 2, axis=-1))
 
 
 def dense_spade_reward(
-    grains: np.ndarray, goal: np.ndarray, tool_origin: np.ndarray | None, deposit: np.ndarray
+    grains: np.ndarray, goal: np.ndarray, tool_point: np.ndarray | None, deposit: np.ndarray
 ) -> np.ndarray:
     """(B,) the appendix's spade shaping, in [0, 1.05]: the mean over the sand grains of their
-    closeness to the goal point, plus :data:`DENSE_SPADE_TOOL_WEIGHT` times the closeness of the
-    tool frame origin (the blade tip) to the deposit (no tool term before the spade is placed).
+    closeness to the goal box's floor centre, plus :data:`DENSE_SPADE_TOOL_WEIGHT` times the
+    closeness of the spade's handle end (:func:`dense_tool_point`) to the deposit's floor centre
+    (no tool term before the spade is placed); the authors' points (their boxes' and spade's body
+    origins).
 
     Args:
         grains: (B, N, D) sand grain (circle or sphere) centres.
-        goal: (B, 1, D) the goal box's centre at grain-radius height (where a delivered grain rests).
-        tool_origin: (B, D) tool frame origins, None before the first step.
+        goal: (B, 1, D) the goal box's floor centre (on the ground).
+        tool_point: (B, D) handle ends, None before the first step.
         deposit: (D,) the deposit's floor centre.
         All in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
     """
     sand_term = gaussian_closeness(np.sum((grains - goal) ** 2, axis=-1)).mean(axis=1)
-    if tool_origin is None:
+    if tool_point is None:
         return sand_term
-    tool_term = gaussian_closeness(np.sum((tool_origin - deposit) ** 2, axis=-1))
+    tool_term = gaussian_closeness(np.sum((tool_point - deposit) ** 2, axis=-1))
     return sand_term + DENSE_SPADE_TOOL_WEIGHT * tool_term
 
 

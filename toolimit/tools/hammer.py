@@ -4,7 +4,8 @@ from toolimit.tools.record import ToolRecord, ToolSpec
 from toolimit.tools.registry import register_tool
 
 HAMMER = ToolRecord(
-    spec=ToolSpec("hammer", length=0.33, head_length=0.035, head_width=0.11, roll_symmetric=True),
+    # the authors' hammer body has its origin at the head's centre: their replay drives the head
+    spec=ToolSpec("hammer", length=0.33, head_length=0.035, head_width=0.11, roll_symmetric=True, steered_point="head"),
     scenes={
         "planar": "toolimit.scenes.planar.hammer:PlanarHammerScene",
         "3d": "toolimit.scenes.spatial.hammer:SpatialHammerScene",

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Literal
 
 from toolimit.errors import InputError
 
@@ -32,6 +33,9 @@ class ToolSpec:
         head_width: extent of the working part across the tool (spade blade width, hammer head
             length along its striking axis, scythe blade length along x).
         roll_symmetric: True when a roll of pi about the tool axis gives an equivalent tool.
+        steered_point: the point whose speed the tool-alone replay caps
+            (:func:`toolimit.scenes.replay.speed_limited`): ``"handle"`` the handle end, ``"head"``
+            the head point; the origin of the authors' tool body, which their replay drives.
     """
 
     name: str
@@ -39,6 +43,12 @@ class ToolSpec:
     head_length: float
     head_width: float
     roll_symmetric: bool = False
+    steered_point: Literal["handle", "head"] = "handle"
+
+    @property
+    def steered_offset(self) -> float:
+        """Distance (m) from the head point along the tool's z axis to ``steered_point``."""
+        return self.length if self.steered_point == "handle" else 0.0
 
 
 @dataclass(frozen=True)

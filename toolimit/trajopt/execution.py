@@ -56,4 +56,4 @@ def execute_in_scene(
         )
     q = resample_joints(trajectory.q, trajectory.dt, scene.control_dt)
     positions, rotations = robot.tool_poses(q, trajectory.base)
-    return replay(scene, params, rng, ToolPose(positions, rotations), batch_size)
+    return replay(scene, params, rng, ToolPose(positions, rotations), batch_size, tool_alone=False)

@@ -369,7 +369,7 @@ def trajectory_in_scene_html(
     arrays = None if targets is None else _target_arrays(targets, len(q) - 1)
     q_control = resample_joints(q, trajectory.dt, scene.control_dt)
     positions, rotations = robot.tool_poses(q_control, trajectory.base)
-    frames = replay_scene(scene, ToolPose(positions, rotations), params, rng)
+    frames = replay_scene(scene, ToolPose(positions, rotations), params, rng, tool_alone=False)
     visualizer = _animated_view(
         robot,
         q_control,

@@ -291,10 +291,11 @@ def set_robot_frame(frame, robot_viz: MeshcatVisualizer, q: np.ndarray) -> None:
 
 # -------------------------------------------------------------------------------------- replays
 def replay_scene(
-    scene: Scene, poses: ToolPose, params: SceneParams, rng: np.random.Generator
+    scene: Scene, poses: ToolPose, params: SceneParams, rng: np.random.Generator, tool_alone: bool = True
 ) -> list[dict[str, np.ndarray]]:
     """Reset one instance of ``scene`` with ``params``, step it through ``poses`` (T, 3)/(T, 3, 3)
-    and return the T snapshots taken after each step (the frames of a replay)."""
+    and return the T snapshots taken after each step (the frames of a replay); ``tool_alone`` as
+    :func:`toolimit.scenes.replay.replay` (False for a robot's forward kinematics)."""
     position = np.asarray(poses.position, dtype=float)
     rotation = np.asarray(poses.rotation, dtype=float)
     if position.ndim != 2 or position.shape[1] != 3 or rotation.shape != (len(position), 3, 3):
@@ -303,7 +304,12 @@ def replay_scene(
         )
     frames: list[dict[str, np.ndarray]] = []
     replay(
-        scene, params, rng, ToolPose(position, rotation), on_step=lambda _, stepped: frames.append(stepped.snapshot())
+        scene,
+        params,
+        rng,
+        ToolPose(position, rotation),
+        on_step=lambda _, stepped: frames.append(stepped.snapshot()),
+        tool_alone=tool_alone,
     )
     return frames
 

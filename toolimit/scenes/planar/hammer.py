@@ -25,9 +25,9 @@ it keeps after the hammer stops (the momentum it received, braked by the frictio
 
 Rewards: goal reward 1 when less than ``planted_tolerance`` (1 mm) of the nail's travel is left.
 Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on
-x-z plane distances, m): exp(-5 |p - n|^2), with p the tool frame origin (the hammer head's centre)
-and n the nail head's top centre where the nail is now; in [0, 1], 0 before the first step (no
-hammer yet). Success: planted at some control step whose end time, measured from the start of the
+x-z plane distances, m): exp(-5 |p - n|^2), with p the hammer's striking face (the head's end along
+the tool's x) and n the nail head's centre where the nail is now (the authors' tip and nail body
+origin); in [0, 1], 0 before the first step (no hammer yet). Success: planted at some control step whose end time, measured from the start of the
 first ``step`` after ``reset``, is at most ``success_window`` seconds (1 s, docs/method.md#success-criteria).
 """
 
@@ -42,6 +42,7 @@ from toolimit.scenes.base import (
     WindowedGoalScene,
     check_reset,
     dense_hammer_reward,
+    dense_tool_point,
     require_reset,
     world_position,
 )
@@ -200,11 +201,12 @@ class PlanarHammerScene(WindowedGoalScene):
         return (self.protrusion - self.travel() < self.planted_tolerance).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) the paper appendix's closeness of the hammer head to the nail head's top centre
-        (module docstring), in [0, 1]; 0 before the first step."""
+        """(B,) the paper appendix's closeness of the hammer's striking face to the nail head's
+        centre (module docstring), in [0, 1]; 0 before the first step."""
         require_reset(self)
-        nail_top = np.stack([np.full(self.batch_size, self.nail_start[0]), self.nail_start[1] - self.travel()], -1)
-        return dense_hammer_reward(self._tool.position if self._tool.placed else None, nail_top)
+        centre = self.nail_start[1] - self.travel() - self.nail_head_thickness / 2.0
+        nail_head = np.stack([np.full(self.batch_size, self.nail_start[0]), centre], -1)
+        return dense_hammer_reward(self._tool.plane_point(dense_tool_point("hammer")), nail_head)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -140,3 +140,10 @@ class KinematicTool:
             raise RuntimeError("the tool has no pose before the first step")
         position, rotation = self.pose
         return position[:, None, :] + np.einsum("bij,kj->bki", rotation, points)
+
+    def plane_point(self, point: np.ndarray) -> np.ndarray | None:
+        """The tool-frame point (3,) at the last target pose in the plane (B, 2), metres; None
+        before the first step."""
+        if self.pose is None:
+            return None
+        return to_plane(self.world_points(np.asarray(point, dtype=float)[None])[:, 0], self.plane)

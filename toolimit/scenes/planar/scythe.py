@@ -14,10 +14,10 @@ the stalk, approaching at about 1 m/s), tested at the ``substeps`` instants of t
 3D motion between control poses: a planar twin that cuts exactly what the 3D scene cuts.
 
 Rewards: goal reward = number of stalks cut. Dense reward (the paper's appendix,
-:func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on x-y plane distances, m): 0.1 times
-the mean over all stalks (the appendix's grass patches, cut or not) of exp(-5 |p - s|^2), with p
-the tool frame origin (the blade root) and s a stalk's point (its base and any point up the stalk
-coincide in this plane); in [0, 0.1], 0 before the first step (no scythe yet). Success: every
+:func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on x-y plane distances, m):
+0.1 exp(-5 |p - g|^2), with p the tool frame origin (the head point: the authors' tip) and g the
+grass patch's centre (the authors' mean over their one patch); in [0, 0.1], 0 before the first
+step (no scythe yet). Success: every
 stalk cut by the end of a control step ending at most ``success_window`` seconds (1 s, docs/method.md#success-criteria)
 after the start of the first ``step`` after ``reset``.
 """
@@ -133,10 +133,11 @@ class PlanarScytheScene(WindowedGoalScene):
         return self.cut.sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) the paper appendix's closeness of the blade root to the stalks (module docstring),
-        in [0, 0.1]; 0 before the first step."""
+        """(B,) the paper appendix's closeness of the head point to the patch's centre (module
+        docstring), in [0, 0.1]; 0 before the first step."""
         require_reset(self)
-        return dense_scythe_reward(self._tool.position if self._tool.placed else None, self.stalks)
+        patch = np.broadcast_to(self.grass_centre, (self.batch_size, 2))
+        return dense_scythe_reward(self._tool.position if self._tool.placed else None, patch)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -30,9 +30,8 @@ Rewards: goal reward = number of circles inside the goal box (between its walls 
 now, below their top).
 Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10, on
 x-z plane distances, m): the mean over circles of exp(-5 |c - g|^2) + 0.05 exp(-5 |p - d|^2), with
-c a circle centre, g the goal box's centre (where the box is now) at circle-radius height (where a
-delivered circle rests on the ground), p the tool frame origin (the blade tip) and d the deposit's
-floor centre; in [0, 1.05]. Before the first step there is no spade and the tool term is 0.
+c a circle centre, g the goal box's floor centre (where the box is now), p the spade's handle end
+and d the deposit's floor centre (the authors' points); in [0, 1.05]. Before the first step there is no spade and the tool term is 0.
 Success (docs/method.md#success-criteria): at least ``success_count`` (10) circles in the box for at least half of the
 control steps since the reset.
 """
@@ -50,6 +49,7 @@ from toolimit.scenes.base import (
     SuccessTracker,
     check_reset,
     dense_spade_reward,
+    dense_tool_point,
     instance_positions,
     parameter_violation,
     require_counts,
@@ -304,8 +304,8 @@ class PlanarSpadeScene(SceneBase):
         """(B,) the paper appendix's shaping: sand close to the box, spade close to the deposit
         (module docstring), in [0, 1.05]."""
         require_reset(self)
-        goal = np.stack([self._box_x, np.full(self.batch_size, self.sand.radius)], -1)  # (B, 2) plane x-z, m
-        tool = self._tool.position if self._tool.placed else None
+        goal = np.stack([self._box_x, np.zeros(self.batch_size)], -1)  # (B, 2) plane x-z, m
+        tool = self._tool.plane_point(dense_tool_point("spade"))
         return dense_spade_reward(self._sand, goal[:, None, :], tool, np.array([self.sand_x, 0.0]))
 
     def is_success(self) -> np.ndarray:

@@ -20,8 +20,9 @@ the nail ``v^2 / (2 a)`` further (a = 100 m/s^2: 2 m/s -> 20 mm, 3 m/s -> 45 mm,
 is not stopped by the nail or the board (a kinematic tool), and the shank is not a collision body.
 
 Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10):
-exp(-5 |p - n|^2), with p the tool frame origin (the hammer head's centre) and n the nail head's
-top centre where the nail is now, world frame, m; in [0, 1]. Before the first step there is no
+exp(-5 |p - n|^2), with p the hammer's striking face (the head's end along the tool's x) and n the
+nail head's centre where the nail is now (the authors' tip and nail body origin), world frame, m;
+in [0, 1]. Before the first step there is no
 hammer (no pose) and the reward is 0.
 """
 
@@ -35,6 +36,7 @@ from toolimit.scenes.base import (
     WindowedGoalScene,
     check_reset,
     dense_hammer_reward,
+    dense_tool_point,
     require_positive,
     require_reset,
     world_position,
@@ -135,6 +137,7 @@ class SpatialHammerScene(WindowedGoalScene):
         head = tool_boxes("hammer")[0]
         #: (P, 3) points on the hammer head box's surface (tool_geometry's head box), tool frame, m.
         self.head_points = head.center + box_surface_points(head.half_extents) @ head.rotation.T
+        self._dense_point = dense_tool_point("hammer")  # (3,) tool frame, m: the striking face
         lowest_head_top = self.plate_thickness + self.protrusion
         self.parameters = (
             world_position(
@@ -248,10 +251,13 @@ class SpatialHammerScene(WindowedGoalScene):
         return (self.remaining_depth() < self.planted_tolerance).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) the paper appendix's closeness of the hammer head to the nail head's top centre
-        (module docstring), in [0, 1]; 0 before the tool is placed."""
-        nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), self.nail_top])
-        return dense_hammer_reward(self._tool.position, nail_head)
+        """(B,) the paper appendix's closeness of the hammer's striking face to the nail head's
+        centre (module docstring), in [0, 1]; 0 before the tool is placed."""
+        centre = self.nail_top - self.plate_thickness / 2.0
+        nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), centre])
+        if self._tool.position is None or self._tool.rotation is None:
+            return dense_hammer_reward(None, nail_head)
+        return dense_hammer_reward(self._tool.position + self._tool.rotation @ self._dense_point, nail_head)
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

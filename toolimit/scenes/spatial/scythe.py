@@ -14,10 +14,9 @@ about 1 m/s or more; tested at the ``substeps`` instants of each control step (2
 tool's constant-velocity motion between control poses.
 
 Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10):
-0.1 times the mean over all stalks (the appendix's grass patches, cut or not) of
-exp(-5 |p - s|^2), with p the tool frame origin (the blade root) and s a stalk's point at half the
-cutting height (half of ``min(max_cut_height, stalk_height)``, the part the edge must cross),
-world frame, m; in [0, 0.1]. Before the first step there is no scythe (no pose) and it is 0.
+0.1 exp(-5 |p - g|^2), with p the tool frame origin (the head point: the authors' tip) and g the
+patch's centre on the ground (the authors' mean over their one grass patch), world frame, m; in
+[0, 0.1]. Before the first step there is no scythe (no pose) and it is 0.
 """
 
 from __future__ import annotations
@@ -137,11 +136,10 @@ class SpatialScytheScene(WindowedGoalScene):
         return self.cut.sum(axis=1).astype(float)
 
     def dense_reward(self) -> np.ndarray:
-        """(B,) the paper appendix's closeness of the blade root to the stalks at half the cutting
-        height (module docstring), in [0, 0.1]; 0 before the tool is placed."""
-        height = np.full(self.stalks_xy.shape[:2] + (1,), min(self.max_cut_height, self.stalk_height) / 2)
-        targets = np.concatenate([self.stalks_xy, height], axis=-1)  # (B, N, 3)
-        return dense_scythe_reward(self._tool.position, targets)
+        """(B,) the paper appendix's closeness of the head point to the patch's centre on the
+        ground (module docstring), in [0, 0.1]; 0 before the tool is placed."""
+        centre = np.array([self.grass_position[0], self.grass_position[1], 0.0])
+        return dense_scythe_reward(self._tool.position, np.broadcast_to(centre, (len(self.stalks_xy), 3)))
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

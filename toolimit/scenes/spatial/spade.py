@@ -51,10 +51,10 @@ at least 10 spheres in the box for at least half of the control steps so far.
 
 Dense reward (the paper's appendix, :func:`~toolimit.scenes.base.gaussian_closeness`, b = 10):
 the mean over spheres of exp(-5 |c - g|^2) + 0.05 exp(-5 |p - d|^2), with c a sphere centre, g the
-goal box's centre at sphere-radius height (where a delivered sphere rests on its floor), p the
-tool frame origin (the blade tip) and d the deposit's floor centre (``sand_position``), world
-frame, m. Before the first step there is no spade (``tool_pose`` None) and the tool term is 0.
-Range [0, 1.05].
+goal box's floor centre, p the spade's handle end and d the deposit's floor centre
+(``sand_position``), world frame, m: the authors' points (their boxes' and spade's body origins).
+Before the first step there is no spade (``tool_pose`` None) and the tool term is 0. Range
+[0, 1.05].
 
 Parameters must keep the deposit and the box apart (their ground rectangles must not overlap) and
 inside the world bound ``WORLD_HALF_SIZE`` (5 m) in x and y; both stand on the ground (the z of
@@ -77,6 +77,7 @@ from toolimit.scenes.base import (
     batched_pose,
     check_reset,
     dense_spade_reward,
+    dense_tool_point,
     parameter_violation,
     world_position,
 )
@@ -240,6 +241,7 @@ class SpatialSpadeScene(SceneBase):
         # The state of the B instances, built by reset.
         self.sand_position, self.sand_yaw = np.zeros(3), 0.0  # m, rad
         self.goal_position = np.zeros((0, 3))  # (B, 3) goal box floor centres, m
+        self._dense_point = dense_tool_point("spade")  # (3,) tool frame, m: the handle end
         self.walls = StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
         self.success_tracker = SuccessTracker(0)
         self._world: ParticleWorld | None = None
@@ -392,8 +394,8 @@ class SpatialSpadeScene(SceneBase):
         """(B,) the paper appendix's shaping: sand close to the box, spade close to the deposit
         (module docstring), in [0, 1.05]."""
         world = self._require_reset()
-        goal = self.goal_position[:, None] + np.array([0.0, 0.0, self.material.radius])
-        return dense_spade_reward(world.positions, goal, world.tool_position, self.sand_position)
+        tool = None if world.tool_rotation is None else world.tool_position + world.tool_rotation @ self._dense_point
+        return dense_spade_reward(world.positions, self.goal_position[:, None], tool, self.sand_position)
 
     def is_success(self) -> np.ndarray:
         """(B,) bool: >= 10 spheres in the box during at least half of the steps so far."""
