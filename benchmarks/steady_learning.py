@@ -29,6 +29,7 @@ import argparse
 import json
 import os
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -38,6 +39,8 @@ from scipy.spatial.transform import Rotation
 from toolimit.artifacts import save_json
 from toolimit.demos import ToolDemo
 from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE, save_demo
+from toolimit.learn.task import TASK_NPZ, LearningTask
+from toolimit.learn.training import CLONING_JSON
 from toolimit.pipeline import PipelineSettings, run_pipeline
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -115,8 +118,14 @@ def run_one(name: str, demo: str, seed: int, out: Path) -> dict:
         "stopped_early": (learning.get("early_stop") or {}).get("stopped_at_ppo_env_steps") is not None,
         "wall_time_s": record["wall_time_s"],
         "stage_times_s": record["stage_times_s"],
-        "selected_candidate": trajectory["best"],
+        "selected_candidate": trajectory.get("kept", trajectory["best"]),
+        "learnt_candidate": int(LearningTask.load(out / name / "learning" / TASK_NPZ).source["candidate"]),
+        "shortlist": trajectory.get("shortlist"),
+        "clone_check": json.loads((out / name / "learning" / CLONING_JSON).read_text()).get("clone_check"),
         "load_at_start": load,
+        "commit": subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        ).stdout.strip(),
     }
 
 
