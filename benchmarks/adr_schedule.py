@@ -13,13 +13,17 @@ success per update). The runs should differ only in ``--adr-every``. For each, u
   run's wall time (the runs share two cores with other jobs: the episode count is the firm cost).
 
 A schedule is too slow when its runs push at nearly every decision (the bounds wait for tests,
-not for the policy), too fast when most decisions hold or pull while the tests cost simulation:
-the README ("Domain randomisation") reads the figures. The measurement:
+not for the policy), too fast when most decisions hold or pull while the tests cost simulation.
+``--pick`` states the choice this measurement makes (:func:`pick`), from the fastest and the slowest
+schedule measured: while the tests limit the growth, pushes per PPO step scale as 1 / every, so the
+longest period that still grows the bounds as fast as the fastest schedule did is
+``every_slow * pushes_slow / pushes_fast`` (per PPO step), rounded and kept between the two; the
+README ("Domain randomisation") reads the figures. The measurement:
 
     toolimit learn --env toolimit/Spade3D-v0 --adr --preset toolimit --timesteps 1500000 \\
         --adr-every K --out runs/adr_everyK          # K = 2 and 10, seed 0
     python benchmarks/adr_schedule.py runs/adr_every2 runs/adr_every10 \\
-        --json benchmarks/results/adr_schedule.json
+        --json benchmarks/results/adr_schedule.json --pick
 """
 
 from __future__ import annotations
@@ -86,12 +90,28 @@ def summary(run: Path, at: int | None, every: int | None = None) -> dict[str, An
     }
 
 
+def pushes_per_million(row: dict[str, Any]) -> float:
+    """Pushes per million PPO steps of a :func:`summary` row."""
+    return row["decisions"]["push"] / row["ppo_env_steps"] * 1e6
+
+
+def pick(rows: list[dict[str, Any]]) -> int:
+    """The test period the measurement chooses (module docstring)."""
+    fast = min(rows, key=lambda row: row["every"])
+    slow = max(rows, key=lambda row: row["every"])
+    if pushes_per_million(fast) <= 0.0:
+        return int(slow["every"])
+    matched = slow["every"] * pushes_per_million(slow) / pushes_per_million(fast)
+    return int(min(max(round(matched), fast["every"]), slow["every"]))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("runs", nargs="+", type=Path, help="toolimit learn --adr folders")
     parser.add_argument("--at", type=int, default=None, help="PPO steps to compare at (default: the shortest run's)")
     parser.add_argument("--every", type=int, default=None, help="the test period of runs still going")
     parser.add_argument("--json", type=Path, default=None, help="also save the figures here")
+    parser.add_argument("--pick", action="store_true", help="print the chosen period last, alone on its line")
     args = parser.parse_args()
     at = args.at
     if at is None:
@@ -106,10 +126,14 @@ def main() -> None:
             f"range {row['range_m'][0]:.2f} x {row['range_m'][1]:.2f} m ({row['area_share']:.0%} of the rectangle); "
             f"boundary success {row['boundary_success']:.2f} (last {LAST_TESTS} tests "
             f"{row['boundary_success_last']:.2f}); training success {row['training_success_last']:.2f}; "
-            f"test episodes {row['test_episodes_per_training_episode']:.2f} per training episode"
+            f"test episodes {row['test_episodes_per_training_episode']:.2f} per training episode; "
+            f"{pushes_per_million(row):.1f} pushes per M steps"
         )
+    chosen = pick(rows) if args.pick else None
     if args.json is not None:
-        save_json(args.json, {"at_ppo_env_steps": at, "runs": rows})
+        save_json(args.json, {"at_ppo_env_steps": at, "runs": rows, "picked_every": chosen})
+    if chosen is not None:
+        print(chosen)
 
 
 if __name__ == "__main__":
