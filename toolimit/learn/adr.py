@@ -37,10 +37,14 @@ Only the coordinates the scene uses are randomised (:attr:`AdrBounds.axes`): x a
 in the planar x-z world, whose box ignores y. A position that makes the scene invalid (the box on
 the deposit, outside the world) is redrawn (up to :data:`REDRAWS` times, then the aligned position
 is used), and a bound is not pushed to a value where no position is valid (:func:`boundary_test`).
-The default period :data:`EVERY` was chosen by measurement (README, "Domain randomisation"): the
-full rectangle needs at least 38 pushes in 3D (10 + 10 + 9 + 9), i.e. 76 tests of one batch each,
-and a test costs one batch of B episodes, the simulation of one PPO update with the project's
-presets.
+The default period :data:`EVERY` (8 updates) was chosen by measurement (README, "Domain
+randomisation"; ``benchmarks/adr_schedule.py``): on the Panda spade, seed 0, 1.5 M PPO steps,
+testing every 10 updates pushed at 14 of 16 decisions with 95 % success at the bounds (the tests,
+not the policy, limited the growth: 9.3 pushes per M steps); every 2 updates pushed at 18 of 80 with
+70 % (the policy limited it: 12.0 per M steps, for half an extra episode per training episode);
+the period that matches every 2's growth when tests limit it is 10 x 9.3 / 12.0 = 7.75. The full
+rectangle needs at least 38 pushes in 3D (10 + 10 + 9 + 9), i.e. 76 tests of one batch; a test
+costs one batch of B episodes, an eighth of the simulation at this period.
 """
 
 from __future__ import annotations
@@ -66,7 +70,7 @@ DECISION_EPISODES = 32
 PUSH_SUCCESS = 0.8
 PULL_SUCCESS = 0.2
 #: Default PPO updates between two boundary tests (module docstring).
-EVERY = 2
+EVERY = 8
 #: Draws of an instance's box position before falling back to the aligned one.
 REDRAWS = 100
 #: Seed stream of the ADR generator, apart from the environments' (``[seed, ADR_STREAM]``).
