@@ -1,4 +1,5 @@
-"""Domain randomisation of the goal box: observation, the boundary-test rule, seeding, resume, heat map."""
+"""Domain randomisation of the goal box: observation, the boundary-test rule on success, seeding, resume,
+heat map and reach."""
 
 from __future__ import annotations
 
@@ -14,8 +15,16 @@ from gymnasium.utils.env_checker import check_env
 from toolimit.errors import InputError
 from toolimit.learn import BatchedTaskVecEnv, TaskSimulator, ToolUseEnv, shipped_task
 from toolimit.learn import adr as adr_module
-from toolimit.learn.adr import DELTA, HALF_RANGE, AdrBounds, AdrState, boundary_test
-from toolimit.learn.heat_map import goal_box_heat_map
+from toolimit.learn.adr import (
+    DECISION_EPISODES,
+    DELTA,
+    HALF_RANGE,
+    AdrBounds,
+    AdrState,
+    BoundaryBatch,
+    boundary_test,
+)
+from toolimit.learn.heat_map import HeatMap, goal_box_heat_map
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
 from toolimit.viz.svg_heat_map import heat_map_svg
 
@@ -69,58 +78,134 @@ def test_same_seed_same_draws(spade_task):
 
     def picks(envs: int) -> list[tuple[str, str]]:
         state = BatchedTaskVecEnv(spade_task, envs, seed=5, adr=True).adr
-        return [(t["axis"], t["side"]) for t in (boundary_test(state, lambda _: 0.2) for _ in range(6))]
+        return [(t["axis"], t["side"]) for t in (boundary_test(state, _batch(8, 16)) for _ in range(6))]
 
     assert picks(2) == picks(4), "the tests' picks come from the ADR generator alone, whatever B"
 
 
-def _state(axes=(0, 1)) -> AdrState:
-    return AdrState(AdrBounds.at(np.array([0.2, -0.1, 0.0]), axes), np.random.default_rng(0))
+def _state(axes=(0, 1), seed: int = 0) -> AdrState:
+    return AdrState(AdrBounds.at(np.array([0.2, -0.1, 0.0]), axes), np.random.default_rng(seed))
 
 
-def test_a_high_return_at_the_bound_pushes_it_out_a_low_one_pulls_it_in():
-    state = _state()
-    aligned = state.bounds.aligned.copy()
+def _batch(successes: int, episodes: int = DECISION_EPISODES):
+    """A fake boundary test: ``successes`` of ``episodes`` succeed (the first ones)."""
+    return lambda _: BoundaryBatch(np.arange(episodes) < successes, goal_reward_mean=float(successes))
+
+
+def _side(record) -> tuple[int, int]:
+    return "xy".index(record["axis"]), ("low", "high").index(record["side"])
+
+
+def test_a_bound_is_decided_only_once_its_buffer_holds_the_decision_episodes():
+    """Batches of a quarter of the buffer, all successes: each bound moves out at its own every
+    fourth test and not before; the other bounds' tests do not count towards it."""
+    state, aligned = _state(), _state().bounds.aligned
+    quarter = DECISION_EPISODES // 4
+    seen = {}
     pinned_at = []
 
-    def high(bounds: AdrBounds) -> float:
+    def all_succeed(bounds: AdrBounds) -> BoundaryBatch:
         pinned_at.append((bounds.low.copy(), bounds.high.copy()))
-        return 0.6
+        return BoundaryBatch(np.ones(quarter, dtype=bool), 20.0)
 
-    record = boundary_test(state, high)
-    axis, side = "xy".index(record["axis"]), ("low", "high").index(record["side"])
-    low, high_bound = pinned_at[0]
-    assert low[axis] == high_bound[axis] == aligned[axis], "the batch pins the chosen coordinate at its bound"
-    assert record["after"] == pytest.approx(aligned[axis] + (-DELTA, DELTA)[side])
-    assert state.bounds.bound(axis, side) == record["after"]
+    for _ in range(40):
+        record = boundary_test(state, all_succeed)
+        key = _side(record)
+        seen[key] = seen.get(key, 0) + 1
+        if seen[key] % 4:
+            assert record["decision"] is None and record["after"] == record["bound"], record
+            assert len(state.buffers[key[0]][key[1]]) == quarter * (seen[key] % 4)
+        else:
+            assert record["decision"] == "push" and record["success_rate"] == 1.0, record
+            assert record["after"] == pytest.approx(record["bound"] + (-DELTA, DELTA)[key[1]])
+            assert state.buffers[key[0]][key[1]] == [], "a decision empties the buffer"
+    low, high = pinned_at[0]
+    axis, side = _side(state.tests[0])
+    assert low[axis] == high[axis] == aligned[axis], "the batch pins the chosen coordinate at its bound"
+    moved = sum(t["decision"] == "push" for t in state.tests)
+    assert moved == sum(n // 4 for n in seen.values()) and moved > 0
+    np.testing.assert_allclose((state.bounds.high - state.bounds.low).sum(), moved * DELTA)
+
+
+def test_success_at_the_bound_pushes_it_at_0_8_pulls_it_at_0_2_and_holds_in_between():
+    state = _state()
+    aligned = state.bounds.aligned.copy()
+    n = DECISION_EPISODES
+    record = boundary_test(state, _batch(round(0.8 * n)))  # 26 of 32 = 0.81: out
+    assert record["decision"] == "push" and abs(record["after"] - record["bound"]) == pytest.approx(DELTA)
     for _ in range(200):  # pushes stop at the paper's rectangle
-        boundary_test(state, lambda _: 0.6)
+        boundary_test(state, _batch(n))
     np.testing.assert_allclose(state.bounds.low, aligned - HALF_RANGE)
     np.testing.assert_allclose(state.bounds.high, aligned + HALF_RANGE)
-    boundary_test(state, lambda _: 0.3)  # between the thresholds: nothing moves
-    np.testing.assert_allclose(state.bounds.high - state.bounds.low, 2 * HALF_RANGE)
-    record = boundary_test(state, lambda _: -0.1)
-    assert abs(record["after"] - record["bound"]) == pytest.approx(DELTA), "a negative return pulls the bound in"
+    assert state.tests[-1]["decision"] == "hold", "at the rectangle a success cannot push further"
+    for successes in (round(0.8 * n) - 1, n // 2, round(0.2 * n) + 1):  # 25, 16, 7 of 32: nothing moves
+        record = boundary_test(state, _batch(successes))
+        assert record["decision"] == "hold" and record["after"] == record["bound"], record
+    record = boundary_test(state, _batch(round(0.2 * n)))  # 6 of 32 = 0.19: in
+    assert record["decision"] == "pull" and record["success_rate"] == pytest.approx(6 / 32)
+    assert abs(record["after"] - record["bound"]) == pytest.approx(DELTA)
     for _ in range(200):  # pulls stop at the aligned value
-        boundary_test(state, lambda _: -0.1)
+        boundary_test(state, _batch(0))
     np.testing.assert_allclose(state.bounds.low, aligned)
     np.testing.assert_allclose(state.bounds.high, aligned)
-    assert len(state.tests) == 403
+    assert len(state.tests) == 405
+
+
+def test_a_buffer_mixes_its_batches_and_survives_a_checkpoint():
+    """Half a buffer of successes, then half of failures at the same bound: 0.5, held. The same
+    stream stopped after any test and resumed from the state dict gives the same records."""
+    state = _state(axes=(0,))  # one coordinate: both batches land on x, the side is random
+    half = DECISION_EPISODES // 2
+    stream = [_batch(half, half), _batch(0, half)] * 20
+    for fake in stream:
+        boundary_test(state, fake)
+    for stop in (1, 7, 20):
+        resumed = _state(axes=(0,))
+        for fake in stream[:stop]:
+            boundary_test(resumed, fake)
+        saved = json.loads(json.dumps(resumed.state_dict()))
+        restored = _state(axes=(0,), seed=99)
+        restored.load_state_dict(saved)
+        for fake in stream[stop:]:
+            boundary_test(restored, fake)
+        assert restored.tests == state.tests
+        np.testing.assert_array_equal(restored.bounds.low, state.bounds.low)
+    # each side's decisions: a buffer of one success batch and one failure batch is exactly 0.5
+    rates = [t["success_rate"] for t in state.tests if t["decision"] is not None]
+    assert rates and all(r in (0.0, 0.5, 1.0) for r in rates)
+    assert 0.5 in rates
+
+
+def test_same_seed_same_decisions_on_a_random_success_stream():
+    def run(seed: int) -> list:
+        state, stream = _state(seed=seed), np.random.default_rng(7)
+
+        def noisy(_: AdrBounds) -> BoundaryBatch:
+            return BoundaryBatch(stream.random(16) < 0.85, 0.0)
+
+        for _ in range(60):
+            boundary_test(state, noisy)
+        return state.tests
+
+    assert run(3) == run(3)
+    assert run(3) != run(4)
 
 
 def test_a_bound_is_not_pushed_where_the_box_cannot_stand_and_planar_moves_x_only():
     state = _state(axes=(0, 2))
-    record = boundary_test(state, lambda _: 1.0, placeable=lambda _: False)
-    assert record["axis"] == "x" and record["after"] == record["bound"]
+    record = boundary_test(state, _batch(DECISION_EPISODES), placeable=lambda _: False)
+    assert record["axis"] == "x" and record["after"] == record["bound"] and record["decision"] == "hold"
     for _ in range(50):
-        boundary_test(state, lambda _: 1.0)
+        boundary_test(state, _batch(DECISION_EPISODES))
     assert state.bounds.low[1] == state.bounds.high[1] == -0.1
 
 
 def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, monkeypatch):
-    """Every test pushes (threshold lowered), so bounds move and the environment is reset in between;
-    three updates in one go, or one, a stop and the rest: same network, same bounds and tests."""
-    monkeypatch.setattr(adr_module, "PUSH_THRESHOLD", -1.0)
+    """Every test pushes (threshold lowered, one batch a decision), so bounds move and the
+    environment is reset in between; three updates in one go, or one, a stop and the rest: same
+    network, same bounds and tests."""
+    monkeypatch.setattr(adr_module, "PUSH_SUCCESS", 0.0)
+    monkeypatch.setattr(adr_module, "DECISION_EPISODES", TINY.envs)
     per_update = spade_task.horizon * 2
     three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
@@ -132,6 +217,7 @@ def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, m
     assert resumed.record["adr"] == whole.record["adr"]
     tests = whole.record["adr"]["tests"]
     assert len(tests) == 2  # before updates 2 and 3
+    assert all(t["episodes"] == TINY.envs and t["decision"] in ("push", "hold") for t in tests)
     # x grows away from the deposit only: 0.05 m towards it, the box would stand on it
     assert whole.record["adr"]["range_m"][0] == pytest.approx(DELTA * sum(t["side"] == "low" for t in tests))
     assert whole.record["adr"]["range_m"][0] > 0, "seed 0 pushes once, so the environment is reset mid-run"
@@ -141,6 +227,27 @@ def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, m
     assert curves[0][0]["adr_low"] == curves[0][0]["adr_high"] == whole.record["adr"]["aligned"]
     saved = json.loads((tmp_path / "whole" / "learning.json").read_text())["adr"]
     assert saved["adr_low"] == whole.record["adr"]["adr_low"] and saved["every"] == 1
+    assert saved["rule"]["push_success"] == 0.0 and saved["rule"]["pull_success"] == adr_module.PULL_SUCCESS
+
+
+def test_reachable_cells_are_those_within_the_reach_circle_and_only_they_count():
+    """A 3 x 3 map around a base at the origin with a reach of 1 m: the corners (1.41 m) are out."""
+    edges = np.array([-1.5, -0.5, 0.5, 1.5])
+    successes = np.array([[1.0, 1.0, 1.0], [0.0, 1.0, np.nan], [1.0, 0.25, 1.0]])
+    heat_map = HeatMap(
+        x_edges=edges, y_edges=edges, goal_rewards=successes * 20, successes=successes,
+        aligned=np.zeros(2), rectangle=np.array([[-1.0, -1.0], [1.0, 1.0]]), base=np.zeros(2), reach=1.0,
+        deposit=np.zeros(5), episodes=4, observes_box=True,
+    )
+    np.testing.assert_array_equal(heat_map.reachable, [[False, True, False], [True, True, True], [False, True, False]])
+    counts = heat_map.counts()
+    assert counts["standing_in_rectangle"] == 8 and counts["succeeding_in_rectangle"] == 6
+    assert counts["standing_reachable_in_rectangle"] == 4, "the NaN cell and the four corners left out"
+    assert counts["succeeding_reachable_in_rectangle"] == 2, "(0, 1) and the centre; (1, 0) failed, (1, 2) 0.25"
+    assert heat_map.record()["reachable"][0] == [False, True, False]
+    root = ElementTree.fromstring(heat_map_svg(heat_map, "reach"))
+    struck = [e for e in root.iter("{http://www.w3.org/2000/svg}path") if e.get("class") == "unreachable"]
+    assert len(struck) == 4
 
 
 @pytest.fixture(scope="module")
@@ -164,9 +271,12 @@ def test_heat_map_values_come_from_rollouts_and_the_svg_has_one_cell_per_grid_po
     assert heat_map.record()["goal_rewards"][0][2] is None
     # the grid spans 1.5 x the rectangle: the outer cells (0.75 m from the aligned box) lie outside it
     succeeded = int(heat_map.successes[0, 1] >= 0.5) + int(heat_map.successes[0, 0] >= 0.5)
+    middle_reachable = bool(heat_map.reachable[0, 1])
     assert heat_map.counts() == {
         "standing": 2,
         "succeeding": succeeded,
         "standing_in_rectangle": 1,
         "succeeding_in_rectangle": int(heat_map.successes[0, 1] >= 0.5),
+        "standing_reachable_in_rectangle": int(middle_reachable),
+        "succeeding_reachable_in_rectangle": int(middle_reachable and heat_map.successes[0, 1] >= 0.5),
     }

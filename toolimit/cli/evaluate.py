@@ -100,6 +100,7 @@ def _heat_map(args: argparse.Namespace, evaluation: PolicyEvaluation, seed: int)
     print(
         f"heat map over {heat_map.goal_rewards.size} box positions: the box can stand at {record['standing']}, "
         f"the policy succeeds at {record['succeeding']} ({record['succeeding_in_rectangle']} of "
-        f"{record['standing_in_rectangle']} inside the ADR rectangle); wrote {args.heat_map}"
+        f"{record['standing_in_rectangle']} inside the ADR rectangle, {record['succeeding_reachable_in_rectangle']} of "
+        f"the {record['standing_reachable_in_rectangle']} there within the robot's reach); wrote {args.heat_map}"
     )
     return record

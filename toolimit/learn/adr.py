@@ -1,32 +1,50 @@
-"""Automatic domain randomisation (ADR) of the goal box position: the authors' boundary test.
+"""Automatic domain randomisation (ADR) of the goal box position: boundary tests on success.
 
 Under ADR (``adr=True`` of :class:`~toolimit.learn.simulator.TaskSimulator`, ``toolimit learn
 --adr``) every reset places each instance's goal box at an (x, y) drawn uniformly inside the
 current bounds (:class:`AdrBounds`, world frame, m), and the policy observes it. The bounds start at
-the aligned position (the task's) and move by the rule of the authors' code
-(``docs/original_setup.md#adr``), run during PPO by
+the aligned position (the task's) and move by boundary tests, run during PPO by
 :class:`~toolimit.learn.adr_callback.AdrCallback`:
 
-* every ``every`` updates, one coordinate and one of its two bounds are picked at random (from the
-  seeded generator of :class:`AdrState`, saved in checkpoints so that a resume is exact), and one
-  extra batch of episodes runs with that coordinate pinned at that bound (the other uniform inside
-  its bounds), the policy sampling its Gaussian as in training;
-* mean return > :data:`PUSH_THRESHOLD` (0.5): the bound moves out by :data:`DELTA` (0.05 m);
-  mean return < :data:`PULL_THRESHOLD` (0): it moves in by DELTA, never past the aligned value.
-  Returns are per-step averages of the goal reward, as the authors' (reward / H per step), so 0.5
-  is half a sphere in the box per step on average;
+* every ``every`` updates (:data:`EVERY`), one coordinate and one of its two bounds are picked at
+  random (from the seeded generator of :class:`AdrState`, saved in checkpoints so that a resume is
+  exact), and one extra batch of episodes runs with that coordinate pinned at that bound (the other
+  uniform inside its bounds), the policy sampling its Gaussian as in training; each episode's
+  success (the scene's own test, the paper's) joins that bound's buffer;
+* once a bound's buffer holds :data:`DECISION_EPISODES` episodes (two batches of 16), their success
+  rate decides: >= :data:`PUSH_SUCCESS` (0.8) moves the bound out by :data:`DELTA` (0.05 m),
+  <= :data:`PULL_SUCCESS` (0.2) moves it in by DELTA (never past the aligned value), in between
+  it stays; the buffer is then emptied, so every decision rests on episodes at the current bound;
 * the bounds never leave the paper's 100 x 90 cm rectangle around the aligned position (x +-0.5 m,
-  y +-0.45 m, :data:`HALF_RANGE`); the authors' code had +-0.5 m on both and never passed the
-  sampled position to the scene, a bug not reproduced here.
+  y +-0.45 m, :data:`HALF_RANGE`).
+
+This is the rule of OpenAI's ADR (Akkaya et al. 2019, "Solving Rubik's Cube with a Robot Hand",
+algorithm 1: a buffer of boundary performances per bound, a decision once it holds m entries,
+expand at or above t_H, shrink at or below t_L, the buffer cleared), with the paper's success as
+the performance. The authors' code (``docs/original_setup.md#adr``) tests one batch every 100
+iterations and pushes when its mean return (per-step average of spheres in the box) exceeds 0.5,
+pulls below 0: a spade succeeds at a return of about 5, so their bounds could grow where the policy
+delivered a tenth of what success takes (the project's earlier runs with that rule, every 2
+updates: 63 % of 868 tests pushed, the full rectangle at 0.94 M steps, 5 of its 15 positions
+succeeding after 8 M). Here a bound moves out only where the policy already succeeds at it in 4
+episodes of 5: the Done-when's own standard (80 % of positions). With 32 episodes a bound where
+the policy truly succeeds 90 % of the time is pushed with probability 0.96, at 60 % with 0.01, and
+one at 20 % or below is pulled with probability >= 0.54 (binomial). Their bounds could reach +-0.5
+m on both coordinates and their reset never passed the sampled position to the scene, a bug not
+reproduced here.
 
 Only the coordinates the scene uses are randomised (:attr:`AdrBounds.axes`): x and y in 3D, x alone
 in the planar x-z world, whose box ignores y. A position that makes the scene invalid (the box on
 the deposit, outside the world) is redrawn (up to :data:`REDRAWS` times, then the aligned position
 is used), and a bound is not pushed to a value where no position is valid (:func:`boundary_test`).
-The default period :data:`EVERY` is 2 updates, not the authors' 100 iterations: they ran 10,000
-iterations (100 tests); our runs make 50-300 updates, and the full rectangle needs at least 38
-successful pushes in 3D (10 + 10 + 9 + 9), 20 in the plane. One test batch (B episodes) every two
-updates (2 x 2B episodes with the authors' preset) adds a quarter to the simulation.
+The default period :data:`EVERY` (8 updates) was chosen by measurement (README, "Domain
+randomisation"; ``benchmarks/adr_schedule.py``): on the Panda spade, seed 0, 1.5 M PPO steps,
+testing every 10 updates pushed at 14 of 16 decisions with 95 % success at the bounds (the tests,
+not the policy, limited the growth: 9.3 pushes per M steps); every 2 updates pushed at 18 of 80 with
+70 % (the policy limited it: 12.0 per M steps, for half an extra episode per training episode);
+the period that matches every 2's growth when tests limit it is 10 x 9.3 / 12.0 = 7.75. The full
+rectangle needs at least 38 pushes in 3D (10 + 10 + 9 + 9), i.e. 76 tests of one batch; a test
+costs one batch of B episodes, an eighth of the simulation at this period.
 """
 
 from __future__ import annotations
@@ -44,12 +62,15 @@ from toolimit.scenes.base import ParameterSpec, Scene
 GOAL_BOX = "goal_position"
 #: Half sizes (m, world x and y) of the paper's 100 x 90 cm range around the aligned position.
 HALF_RANGE = np.array([0.5, 0.45])
-#: Step of a bound (m) and the mean returns above which it is pushed out, below which pulled in.
+#: Step of a bound, m (the authors').
 DELTA = 0.05
-PUSH_THRESHOLD = 0.5
-PULL_THRESHOLD = 0.0
+#: Boundary episodes behind one decision on a bound (OpenAI's buffer length m).
+DECISION_EPISODES = 32
+#: Success rates at the bound at or above which it is pushed out, at or below which pulled in.
+PUSH_SUCCESS = 0.8
+PULL_SUCCESS = 0.2
 #: Default PPO updates between two boundary tests (module docstring).
-EVERY = 2
+EVERY = 8
 #: Draws of an instance's box position before falling back to the aligned one.
 REDRAWS = 100
 #: Seed stream of the ADR generator, apart from the environments' (``[seed, ADR_STREAM]``).
@@ -134,14 +155,21 @@ class AdrBounds:
         return {"adr_low": self.low.tolist(), "adr_high": self.high.tolist()}
 
 
+def _empty_buffers() -> list[list[list[bool]]]:
+    return [[[], []], [[], []]]
+
+
 @dataclass
 class AdrState:
     """What the boundary tests change and a checkpoint keeps: the bounds (shared with the
-    environment's simulator), the tests' generator, the update last tested at, the tests so far."""
+    environment's simulator), the tests' generator, the update last tested at, each bound's buffer
+    of boundary-episode successes (``buffers[axis][side]``, emptied at each decision), the tests
+    so far."""
 
     bounds: AdrBounds
     rng: np.random.Generator
     tested_at: int = 0
+    buffers: list[list[list[bool]]] = field(default_factory=_empty_buffers)
     tests: list[dict[str, Any]] = field(default_factory=list)
 
     def state_dict(self) -> dict[str, Any]:
@@ -150,6 +178,7 @@ class AdrState:
             **self.bounds.record(),
             "rng": self.rng.bit_generator.state,
             "tested_at": self.tested_at,
+            "buffers": self.buffers,
             "tests": self.tests,
         }
 
@@ -159,12 +188,19 @@ class AdrState:
         self.bounds.high[:] = state["adr_high"]
         self.rng.bit_generator.state = state["rng"]
         self.tested_at = int(state["tested_at"])
+        self.buffers = [[[bool(s) for s in side] for side in axis] for axis in state["buffers"]]
         self.tests = list(state["tests"])
 
     def record(self, every: int) -> dict[str, Any]:
-        """The learning record's ``adr`` entry: period, aligned position, bounds, range, tests."""
+        """The learning record's ``adr`` entry: period, rule, aligned position, bounds, range, tests."""
         return {
             "every": every,
+            "rule": {
+                "decision_episodes": DECISION_EPISODES,
+                "push_success": PUSH_SUCCESS,
+                "pull_success": PULL_SUCCESS,
+                "delta_m": DELTA,
+            },
             "aligned": self.bounds.aligned.tolist(),
             **self.bounds.record(),
             "range_m": (self.bounds.high - self.bounds.low).tolist(),
@@ -172,27 +208,56 @@ class AdrState:
         }
 
 
+@dataclass(frozen=True)
+class BoundaryBatch:
+    """The episodes of one boundary test: each one's success (B,) and their mean goal reward at the
+    last step (spade: spheres in the box)."""
+
+    successes: np.ndarray
+    goal_reward_mean: float
+
+
 def boundary_test(
     state: AdrState,
-    mean_return: Callable[[AdrBounds], float],
+    episodes_at: Callable[[AdrBounds], BoundaryBatch],
     placeable: Callable[[AdrBounds], bool] = lambda _: True,
 ) -> dict[str, Any]:
-    """One boundary test (module docstring): pick a coordinate and a side with ``state.rng``, get
-    ``mean_return`` of a batch with the bounds pinned there, and move that bound; a push happens
-    only if ``placeable`` accepts the bounds pinned at the new value. Appends and returns the test's
-    record (axis, side, bound, return, the bound after)."""
+    """One boundary test (module docstring): pick a coordinate and a side with ``state.rng``, run
+    ``episodes_at`` the bounds pinned there, add their successes to that bound's buffer and, once it
+    holds DECISION_EPISODES, decide and empty it; a push happens only if ``placeable`` accepts the
+    bounds pinned at the new value. Appends and returns the test's record (axis, side, bound, the
+    batch's successes and goal reward, the decision and the buffer's success rate behind it, the
+    bound after)."""
     bounds = state.bounds
     axis = int(state.rng.choice(bounds.axes))
     side = int(state.rng.integers(2))
     before = bounds.bound(axis, side)
-    value = mean_return(bounds.pinned(axis, side))
-    after = before
-    if value > PUSH_THRESHOLD:
-        pushed = bounds.moved(axis, side, outwards=True)
-        after = pushed if placeable(bounds.pinned(axis, side, pushed)) else before
-    elif value < PULL_THRESHOLD:
-        after = bounds.moved(axis, side, outwards=False)
+    batch = episodes_at(bounds.pinned(axis, side))
+    buffer = state.buffers[axis][side]
+    buffer.extend(bool(s) for s in np.asarray(batch.successes, dtype=bool))
+    after, decision, rate = before, None, None
+    if len(buffer) >= DECISION_EPISODES:
+        rate = float(np.mean(buffer))
+        decision = "hold"
+        if rate >= PUSH_SUCCESS:
+            pushed = bounds.moved(axis, side, outwards=True)
+            if pushed != before and placeable(bounds.pinned(axis, side, pushed)):
+                after, decision = pushed, "push"
+        elif rate <= PULL_SUCCESS:
+            after = bounds.moved(axis, side, outwards=False)
+            decision = "pull" if after != before else "hold"
+        buffer.clear()
     (bounds.low, bounds.high)[side][axis] = after
-    record = {"axis": "xy"[axis], "side": ("low", "high")[side], "bound": before, "return_mean": value, "after": after}
+    record = {
+        "axis": "xy"[axis],
+        "side": ("low", "high")[side],
+        "bound": before,
+        "successes": int(np.sum(batch.successes)),
+        "episodes": len(batch.successes),
+        "goal_reward_mean": float(batch.goal_reward_mean),
+        "decision": decision,
+        "success_rate": rate,
+        "after": after,
+    }
     state.tests.append(record)
     return record

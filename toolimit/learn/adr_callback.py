@@ -13,7 +13,7 @@ import numpy as np
 import torch
 from stable_baselines3.common.callbacks import BaseCallback
 
-from toolimit.learn.adr import EVERY, AdrBounds, boundary_test
+from toolimit.learn.adr import EVERY, AdrBounds, BoundaryBatch, boundary_test
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
@@ -43,7 +43,7 @@ class AdrCallback(BaseCallback):
         update = self.model.num_timesteps // steps
         if update == 0 or update % self.every or self.state.tested_at >= update:
             return
-        record = boundary_test(self.state, self._mean_return, self._placeable)
+        record = boundary_test(self.state, self._episodes_at, self._placeable)
         self.state.tested_at = update
         if record["after"] != record["bound"]:
             self.model._last_obs = self.env.reset()  # type: ignore[attr-defined]
@@ -52,21 +52,21 @@ class AdrCallback(BaseCallback):
     def _placeable(self, bounds: AdrBounds) -> bool:
         return bounds.placeable(self.state.rng, self.simulator.box_validity(self.simulator.task.params))
 
-    def _mean_return(self, bounds: AdrBounds) -> float:
-        """Mean return of one batch of episodes with the box drawn inside ``bounds``: the policy's
-        mean plus its Gaussian noise, drawn from the ADR generator (torch's stays untouched)."""
+    def _episodes_at(self, bounds: AdrBounds) -> BoundaryBatch:
+        """One batch of episodes with the box drawn inside ``bounds``: each one's success (the
+        scene's test) and the mean goal reward; the policy's mean plus its Gaussian noise, drawn
+        from the ADR generator (torch's stays untouched)."""
         simulator, rng = self.simulator, self.state.rng
         simulator.adr_bounds = bounds
         policy = self.model.policy
         std = torch.exp(cast(torch.Tensor, policy.log_std)).detach().numpy()
         observation = simulator.reset(rng)
-        returns = np.zeros(simulator.batch_size)
+        goal = np.zeros(simulator.batch_size)
         while not simulator.done:
             mean, _ = policy.predict(observation, deterministic=True)
             action = np.clip(mean + std * rng.normal(size=mean.shape), -1.0, 1.0)
-            observation, reward, _ = simulator.step(action)
-            returns += reward
-        return float(returns.mean())
+            observation, _, goal = simulator.step(action)
+        return BoundaryBatch(simulator.is_success(), float(goal.mean()))
 
     def _on_step(self) -> bool:
         return True

@@ -12,7 +12,10 @@ The robot's reach (:func:`tool_reach`) is the farthest horizontal distance from 
 the tool frame's origin (the blade tip) over the robot's joint ranges, with the tip above the
 ground: the largest of :data:`REACH_SAMPLES` uniform joint samples, refined by a seeded local
 search (random steps shrinking from 0.3 to 0.003 rad, kept when they reach farther). Beyond this
-circle no motion of the arm can bring the blade over the box.
+circle no motion of the arm can bring the blade over the box, so a cell whose box centre lies
+outside it is not reachable (:attr:`HeatMap.reachable`), and the counts the ADR target is judged on
+(:meth:`HeatMap.counts`: the rectangle's positions where the box can stand and the robot can reach)
+leave it out.
 """
 
 from __future__ import annotations
@@ -72,21 +75,33 @@ class HeatMap:
         """(nx,), (ny,) the cells' box x and y, m."""
         return (self.x_edges[:-1] + self.x_edges[1:]) / 2, (self.y_edges[:-1] + self.y_edges[1:]) / 2
 
+    @property
+    def reachable(self) -> np.ndarray:
+        """(ny, nx) bool: the cell's box centre is within the tool's reach of the robot base
+        (horizontal distance <= :attr:`reach`)."""
+        xs, ys = self.centres
+        x, y = np.meshgrid(xs, ys)
+        return np.hypot(x - self.base[0], y - self.base[1]) <= self.reach
+
     def counts(self) -> dict[str, int]:
         """How many cells the box can stand in (``standing``) and, of those, how many the policy
         succeeds in (``succeeding``: success in at least half of the cell's episodes); the same
-        inside the ADR rectangle (``*_in_rectangle``: cell centres within it, 1 mm tolerance)."""
+        inside the ADR rectangle (``*_in_rectangle``: cell centres within it, 1 mm tolerance), and
+        inside it where the robot can also reach (``*_reachable_in_rectangle``, :attr:`reachable`)."""
         xs, ys = self.centres
         x, y = np.meshgrid(xs, ys)
         low, high = self.rectangle[0] - 1e-3, self.rectangle[1] + 1e-3
         inside = (low[0] <= x) & (x <= high[0]) & (low[1] <= y) & (y <= high[1])
         standing = ~np.isnan(self.successes)
         succeeding = self.successes >= 0.5  # False where NaN (the box cannot stand)
+        reachable = inside & self.reachable
         return {
             "standing": int(standing.sum()),
             "succeeding": int(succeeding.sum()),
             "standing_in_rectangle": int((standing & inside).sum()),
             "succeeding_in_rectangle": int((succeeding & inside).sum()),
+            "standing_reachable_in_rectangle": int((standing & reachable).sum()),
+            "succeeding_reachable_in_rectangle": int((succeeding & reachable).sum()),
         }
 
     def record(self) -> dict[str, Any]:
@@ -104,6 +119,7 @@ class HeatMap:
             "rectangle": self.rectangle.tolist(),
             "base": self.base.tolist(),
             "reach_m": self.reach,
+            "reachable": self.reachable.tolist(),
             "episodes": self.episodes,
             "observes_box": self.observes_box,
             **self.counts(),

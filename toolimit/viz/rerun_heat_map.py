@@ -2,7 +2,8 @@
 
 A 2D view seen from above, world x, y in metres, logged with y negated (rerun's 2D views point y
 down) so that it reads like the SVG: ``heat_map/cells`` (one coloured box per grid point, labelled
-with its goal reward; the colours of :mod:`toolimit.viz.svg_heat_map`), ``heat_map/adr_range``,
+with its goal reward, and "beyond reach" where the robot cannot reach the box; the colours of
+:mod:`toolimit.viz.svg_heat_map`), ``heat_map/adr_range``,
 ``heat_map/deposit``, ``heat_map/reach`` (the tool's reach circle), ``heat_map/base`` and
 ``heat_map/aligned``.
 """
@@ -45,7 +46,10 @@ def save_heat_map_recording(heat_map: HeatMap, path: str | Path) -> Path | None:
                 centers=centres * FLIP,
                 half_sizes=half,
                 colors=[_rgb(INVALID if np.isnan(v) else colour(v / top)) for v in values],
-                labels=["no box" if np.isnan(v) else f"{v:.1f}" for v in values],
+                labels=[
+                    ("no box" if np.isnan(v) else f"{v:.1f}") + ("" if reachable else " (beyond reach)")
+                    for v, reachable in zip(values, heat_map.reachable.reshape(-1), strict=True)
+                ],
             ),
         )
         low, high = heat_map.rectangle

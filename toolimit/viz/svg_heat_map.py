@@ -2,9 +2,10 @@
 
 Seen from above: world x to the right, y up, equal scale on both axes (metres). One coloured cell
 per grid point (:class:`toolimit.learn.heat_map.HeatMap`; hover shows its box position and value),
-grey where the box cannot stand; a colour bar with its scale; the ADR rectangle (dashed), the
-aligned box position (white cross), the deposit (grey outline), the robot base (black dot) and the
-tool's reach around it (black circle), all clipped to the map.
+grey where the box cannot stand, struck through where the robot cannot reach the box; a colour bar
+with its scale; the ADR rectangle (dashed), the aligned box position (white cross), the deposit
+(grey outline), the robot base (black dot) and the tool's reach around it (black circle), all
+clipped to the map.
 """
 
 from __future__ import annotations
@@ -67,11 +68,19 @@ def heat_map_svg(heat_map: HeatMap, title: str, value_label: str = "spheres in t
             left, upper = px(heat_map.x_edges[i], heat_map.y_edges[j + 1])
             fill = INVALID if np.isnan(value) else colour(value / top)
             text = "box cannot stand here" if np.isnan(value) else f"{value:.1f} {value_label}"
+            text += "" if heat_map.reachable[j, i] else " (beyond the robot's reach)"
+            cell_width = (heat_map.x_edges[i + 1] - heat_map.x_edges[i]) * scale
+            cell_height = (heat_map.y_edges[j + 1] - heat_map.y_edges[j]) * scale
             parts.append(
-                f'<rect class="cell" x="{left:.2f}" y="{upper:.2f}" width="{(heat_map.x_edges[i + 1] - heat_map.x_edges[i]) * scale:.2f}" '
-                f'height="{(heat_map.y_edges[j + 1] - heat_map.y_edges[j]) * scale:.2f}" fill="{fill}">'
+                f'<rect class="cell" x="{left:.2f}" y="{upper:.2f}" width="{cell_width:.2f}" '
+                f'height="{cell_height:.2f}" fill="{fill}">'
                 f"<title>box at x = {x:.2f} m, y = {y:.2f} m: {escape(text)}</title></rect>"
             )
+            if not heat_map.reachable[j, i]:
+                parts.append(
+                    f'<path class="unreachable" d="M {left:.2f} {upper + cell_height:.2f} L {left + cell_width:.2f} '
+                    f'{upper:.2f}" stroke="white" stroke-width="1.5" opacity="0.7"/>'
+                )
     parts += _marks(heat_map, px, scale)
     parts += _axes(x0, x1, y0, y1, px, width, height)
     parts += _legend(top, MARGIN + width + 25, height, value_label)
@@ -123,7 +132,8 @@ def _axes(x0: float, x1: float, y0: float, y1: float, px, width: float, height: 
 
 
 def _legend(top: float, x: float, height: float, label: str) -> list[str]:
-    """A vertical colour bar from 0 (bottom) to ``top`` with five ticks, and the grey 'invalid' key."""
+    """A vertical colour bar from 0 (bottom) to ``top`` with five ticks, the grey 'invalid' key and
+    the stroke marking cells beyond reach."""
     bar = min(height, 300.0)
     stops = "".join(
         f'<stop offset="{k / (len(VIRIDIS) - 1):.2f}" stop-color="{colour(1 - k / (len(VIRIDIS) - 1))}"/>'
@@ -140,4 +150,8 @@ def _legend(top: float, x: float, height: float, label: str) -> list[str]:
         parts.append(f'<text x="{x + 24:.2f}" y="{y + 4:.2f}">{value:.1f}</text>')
     parts.append(f'<rect x="{x:.2f}" y="{MARGIN + bar + 14:.2f}" width="18" height="12" fill="{INVALID}"/>')
     parts.append(f'<text x="{x + 24:.2f}" y="{MARGIN + bar + 24:.2f}">no box</text>')
+    parts.append(
+        f'<path d="M {x:.2f} {MARGIN + bar + 52:.2f} L {x + 18:.2f} {MARGIN + bar + 40:.2f}" stroke="black" stroke-width="1.5"/>'
+    )
+    parts.append(f'<text x="{x + 24:.2f}" y="{MARGIN + bar + 50:.2f}">beyond reach</text>')
     return parts
