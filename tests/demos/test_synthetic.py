@@ -78,22 +78,37 @@ def test_hammer_strikes_the_same_height_fast_and_face_down(seed, fps):
 
 
 @pytest.mark.parametrize("seed, fps", CASES)
-def test_scythe_sweeps_low_wide_and_fast(seed, fps):
+def test_scythe_draws_the_blade_low_towards_the_hands_with_the_snath_nearly_level(seed, fps):
+    """What the authors' cut rule needs (toolimit.scenes.scythe_cut): the snath within 30 degrees of
+    horizontal and the edge moving towards the hands at more than 1 m/s, at most 0.1 m high."""
     motion = synthesize_motion("scythe", seed, fps)
-    demo, sweeps = motion.clean, motion.events["sweeps"]
-    assert 1 <= len(sweeps) <= 3
-    for start, end in sweeps:
-        blade = demo.head[start : end + 1]
-        assert np.all((blade[:, 2] >= 0.02) & (blade[:, 2] <= 0.06))
-        inward = demo.axis[start : end + 1, :2]
-        turned = np.degrees(np.ptp(np.unwrap(np.arctan2(inward[:, 1], inward[:, 0]))))
-        assert 120 <= turned <= 160
-        chord = np.linalg.norm(blade[-1, :2] - blade[0, :2])
-        assert 2 * 0.6 * np.sin(np.radians(60)) <= chord <= 2.0
-        assert 2.0 <= np.linalg.norm(demo.head_velocity()[(start + end) // 2]) <= 4.0
-    if len(sweeps) > 1:  # the mower steps forward between sweeps
-        first, last = demo.head[sweeps[0][0]], demo.head[sweeps[-1][0]]
-        assert 0.1 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7
+    demo, draws = motion.clean, motion.events["sweeps"]
+    assert 1 <= len(draws) <= 2
+    velocity = demo.head_velocity()
+    for start, end in draws:
+        frames = slice(start, end + 1)
+        assert end - start >= 3  # at least three frames of the draw at the video's rate
+        assert np.all((demo.head[frames, 2] >= 0.02) & (demo.head[frames, 2] <= 0.05))
+        elevation = np.degrees(np.arcsin(demo.axis[frames, 2]))
+        assert np.all((elevation >= 5 - 1e-9) & (elevation <= 20 + 1e-9))
+        snath = demo.axis[frames, :2] / np.linalg.norm(demo.axis[frames, :2], axis=1, keepdims=True)
+        towards_hands = np.sum(velocity[frames, :2] * snath, axis=1)  # the head's speed along the snath
+        assert np.all((towards_hands >= 1.25) & (towards_hands <= 2.1))
+        across = np.linalg.norm(velocity[frames, :2] - towards_hands[:, None] * snath, axis=1)
+        assert np.all((across >= 0.3) & (across <= 0.95))  # the body turns: the blade slides along its length
+        turn = snath[0, 0] * snath[-1, 1] - snath[0, 1] * snath[-1, 0]  # z of their cross product
+        assert turn > 0  # right to left: the snath turns counter-clockwise
+    # Outside the draws the head never moves towards the hands that fast near the ground.
+    near_ground = demo.head[:-1, 2] <= 0.1
+    drawing = np.zeros(demo.n_frames - 1, dtype=bool)
+    for start, end in draws:
+        drawing[start - 3 : end + 3] = True
+    snath = demo.axis[:-1, :2] / np.linalg.norm(demo.axis[:-1, :2], axis=1, keepdims=True)
+    towards_hands = np.sum(velocity[:-1, :2] * snath, axis=1)
+    assert np.all(towards_hands[near_ground & ~drawing] < 1.25)
+    if len(draws) > 1:  # the mower steps forward between strokes
+        first, last = demo.head[draws[0][0]], demo.head[draws[-1][0]]
+        assert 0.05 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7
 
 
 def test_determinism_and_variety():
