@@ -30,7 +30,9 @@ def test_common_properties(tool, seed, fps):
     assert clean.head[:, 2].min() > 0.0 and clean.handle[:, 2].min() > 0.0
     assert clean.speed().max() < 4.5
     # Noise: a few mm everywhere but the outliers, which are 2-6 % of frames and off by > 5 cm.
-    error = np.maximum(np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1))
+    error = np.maximum(
+        np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1)
+    )
     inliers = np.setdiff1d(np.arange(clean.n_frames), motion.outlier_frames)
     assert 0.002 <= motion.jitter <= 0.005
     assert np.median(error[inliers]) < 0.012 and error[inliers].max() < 0.03
@@ -93,19 +95,19 @@ def test_scythe_draws_the_blade_low_towards_the_hands_with_the_snath_nearly_leve
         assert np.all((elevation >= 5 - 1e-9) & (elevation <= 20 + 1e-9))
         snath = demo.axis[frames, :2] / np.linalg.norm(demo.axis[frames, :2], axis=1, keepdims=True)
         towards_hands = np.sum(velocity[frames, :2] * snath, axis=1)  # the head's speed along the snath
-        assert np.all((towards_hands >= 1.25) & (towards_hands <= 2.1))
+        assert np.all((towards_hands >= 1.5) & (towards_hands <= 2.3))
         across = np.linalg.norm(velocity[frames, :2] - towards_hands[:, None] * snath, axis=1)
         assert np.all((across >= 0.3) & (across <= 0.95))  # the body turns: the blade slides along its length
         turn = snath[0, 0] * snath[-1, 1] - snath[0, 1] * snath[-1, 0]  # z of their cross product
         assert turn > 0  # right to left: the snath turns counter-clockwise
-    # Outside the draws the head never moves towards the hands that fast near the ground.
-    near_ground = demo.head[:-1, 2] <= 0.1
-    drawing = np.zeros(demo.n_frames - 1, dtype=bool)
+    # The head moves towards the hands fastest in the draw: the half second of swing before it and
+    # of follow-through after it ramp that speed up and down.
+    snath = demo.axis[:, :2] / np.linalg.norm(demo.axis[:, :2], axis=1, keepdims=True)
+    towards_hands = np.sum(velocity[:, :2] * snath, axis=1)
+    half_second = int(fps / 2)
     for start, end in draws:
-        drawing[start - 3 : end + 3] = True
-    snath = demo.axis[:-1, :2] / np.linalg.norm(demo.axis[:-1, :2], axis=1, keepdims=True)
-    towards_hands = np.sum(velocity[:-1, :2] * snath, axis=1)
-    assert np.all(towards_hands[near_ground & ~drawing] < 1.25)
+        around = np.r_[max(start - half_second, 0) : start, end + 1 : end + 1 + half_second]
+        assert towards_hands[around].max() < towards_hands[start : end + 1].min()
     if len(draws) > 1:  # the mower steps forward between strokes
         first, last = demo.head[draws[0][0]], demo.head[draws[-1][0]]
         assert 0.05 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7

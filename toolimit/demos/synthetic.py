@@ -303,7 +303,7 @@ def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
 
     A stroke, as a mower makes it: the blade swung in from the right, low, then drawn through the
     grass in front of the body (the *draw*: the body turns left while the arms pull the snath in,
-    so the blade slides along its length and moves towards the hands at 1.3-1.9 m/s), then
+    so the blade slides along its length and moves towards the hands at 1.6-2.2 m/s), then
     carried on to the left and lifted. What the authors' tool and cut rule need
     (:mod:`toolimit.scenes.scythe_cut`): their blade lies in the snath's plane and the edge's
     normal is the snath, so the snath is held 5-20 degrees above horizontal (a real scythe's snath
@@ -330,10 +330,9 @@ def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
     knots: list[Knot] = []
     draws, pull_speeds, turn_speeds = [], [], []
     for i in range(n_strokes):
-        pull = rng.uniform(0.2, 0.3)  # the draw's length along the snath, m
-        pull_speed, turn_speed = rng.uniform(1.3, 1.9), rng.uniform(0.4, 0.8)  # m/s at the head
-        draw_frames = max(3, int(round(pull / pull_speed * fps)))
-        pull_speed = pull * fps / draw_frames
+        pull_speed, turn_speed = rng.uniform(1.6, 2.2), rng.uniform(0.4, 0.8)  # m/s at the head
+        draw_frames = max(3, int(round(rng.uniform(0.2, 0.3) / pull_speed * fps)))
+        pull = pull_speed * draw_frames / fps  # the draw's length along the snath, m
         radius_out = radius_in + pull
         omega = turn_speed / (radius_out - pull / 2)  # rad/s
         centre = deg(rng.uniform(-15, 15))  # where the draw crosses in front of the body
