@@ -7,7 +7,10 @@ import pytest
 
 from toolimit.demos import DemoError, synthesize_demo, synthesize_motion
 from toolimit.demos.synthetic import DEMONSTRATOR_SCYTHE_LENGTH
-from toolimit.tools import tool_spec
+from toolimit.scenes import make_scene
+from toolimit.scenes.scythe_cut import scythe_cut_rule
+from toolimit.tools import ToolPose, tool_poses, tool_spec
+from toolimit.tools.frame import swing_rotation
 
 CASES = [(seed, 24) for seed in range(6)] + [(6, 30), (7, 30)]
 
@@ -111,6 +114,29 @@ def test_scythe_draws_the_blade_low_towards_the_hands_with_the_snath_nearly_leve
     if len(draws) > 1:  # the mower steps forward between strokes
         first, last = demo.head[draws[0][0]], demo.head[draws[-1][0]]
         assert 0.05 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_scythe_draw_over_the_patch_cuts_every_stalk_by_the_authors_rule(seed):
+    """With the blade level, its tip leading, and the authors' patch (10 stalks in 0.4 x 0.1 m)
+    centred under the edge half-way through the first draw, the demonstrated motion cuts the
+    stalks, and they fall around the draw (from 3 control steps before it to 2 after it)."""
+    motion = synthesize_motion("scythe", seed, fps=24)  # the scene's control rate
+    demo = motion.clean
+    start, end = motion.events["sweeps"][0]
+    middle = (start + end) // 2
+    blade = np.cross([0.0, 0.0, 1.0], demo.axis[middle])
+    blade *= np.sign(blade @ demo.head_velocity()[middle]) / np.linalg.norm(blade)
+    swing = swing_rotation(demo.axis[middle])
+    poses = tool_poses(demo.head, demo.handle, np.arctan2(blade @ swing[:, 1], blade @ swing[:, 0]))
+    edge_centre = poses.position[middle] + poses.rotation[middle] @ scythe_cut_rule(0.005).edge.mean(axis=0)
+    scene, instances = make_scene("scythe", "3d"), 8
+    scene.reset({"grass_position": np.array([*edge_centre[:2], 0.0])}, np.random.default_rng(seed), instances)
+    for position, rotation in zip(poses.position, poses.rotation):
+        scene.step(ToolPose(np.repeat(position[None], instances, 0), np.repeat(rotation[None], instances, 0)))
+    assert scene.goal_reward().mean() >= 9.5
+    steps = scene.cut_time[np.isfinite(scene.cut_time)] / scene.control_dt  # since the first pose
+    assert steps.min() >= start - 3 and steps.max() <= end + 2
 
 
 def test_determinism_and_variety():
