@@ -5,6 +5,8 @@ tracked by the robot and replayed in its scene). Prints, per demonstration, the 
 alignment reward (``tool_alone``: mean goal reward of its replays of the whole aligned motion), the
 best robot replay reward (``robot``), and for the kept candidate its episode's tool-alone reward
 and both success rates (:func:`success_rates`), and writes them as JSON. The issue's bar: both > 0 on all five demonstrations of each tool.
+For every candidate it also says how its first reward came (:func:`first_reward_motion`): the
+head's speed and the roll's turn over that control step.
 
     flock /work/heavy.lock python benchmarks/timed_tools_replay.py --out /tmp/timed --json results.json
 """
@@ -19,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from toolimit.align.config import AlignmentConfig
+from toolimit.align.search import AlignmentResult
 from toolimit.errors import StageFoundNothing
 from toolimit.pipeline.settings import AlignSettings, TrajoptSettings
 from toolimit.pipeline.stages import TrajectoryStage, align_stage, trajopt_stage
@@ -52,6 +55,7 @@ def measure(demo: str, out: Path, config: AlignmentConfig, starts: int, robot: s
     row["tool_alone"] = result.best.reward
     row["candidates"] = len(result.candidates)
     row["samples_tried"] = result.samples_tried
+    row |= first_reward_motion(result)
     try:
         stage = trajopt_stage(
             out / "alignment", robot, out / "trajectory", TrajoptSettings(starts=starts, workers=1), progress=False
@@ -65,6 +69,24 @@ def measure(demo: str, out: Path, config: AlignmentConfig, starts: int, robot: s
         row["robot"] = 0.0
     row["wall_time_s"] = round(time.perf_counter() - started, 1)
     return row
+
+
+def first_reward_motion(result: AlignmentResult) -> dict:
+    """Per candidate (in order): the frame of its first reward, the head's speed over the control
+    step that earned it (m/s) and the roll's turn over that step (rad, wrapped to [0, pi]). The
+    roll is constant between keypoints and jumps at them; a reward earned with the head nearly
+    still and the roll turning came from the blade spun about the snath in one step, not from
+    the demonstrated motion."""
+    frames, speeds, turns = [], [], []
+    for candidate in result.candidates:
+        assert candidate.cut is not None  # a timed tool's candidate is always cut
+        t = candidate.cut.first_reward_frame
+        _, roll, poses = result.aligned_motion(candidate)
+        before = max(t - 1, 0)
+        frames.append(t)
+        speeds.append(round(float(np.linalg.norm(poses.position[t] - poses.position[before]) * result.demo.fps), 3))
+        turns.append(round(float(abs(np.angle(np.exp(1j * (roll[t] - roll[before]))))), 3))
+    return {"first_reward_frames": frames, "first_reward_head_speed": speeds, "first_reward_roll_turn": turns}
 
 
 def success_rates(stage: TrajectoryStage, robot: str, tool: str, replays: int = 10) -> dict:

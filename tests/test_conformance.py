@@ -31,15 +31,12 @@ from toolimit.robots import ROBOTS, ArmDescription, make_robot, register_robot
 from toolimit.robots import registry as robot_registry
 from toolimit.scenes import available_scenes, make_scene
 from toolimit.scenes.base import InvalidSceneParameters, SceneBase, world_position
-from toolimit.scenes.spatial.sweep import pull_demonstration
 from toolimit.tools import ToolPose, ToolRecord, ToolSpec, register_tool, tool_record, tool_records
 from toolimit.tools import registry as tool_registry
 from toolimit.trajopt import SqpOptions, TrackOptions, targets_from_alignment, track
 
 SEED = 0
 #: Alignment: stop at the first sample that earns a reward in its one replay.
-#: The patch of the scythe's demonstration (m).
-PULL = {"grass_position": np.array([0.6, -0.3, 0.0])}
 TINY_ALIGNMENT = AlignmentConfig(samples=200, candidates=1, replays=1, accept_replays=1, screen_replays=0)
 #: Trajectory optimisation: one start from the held rest pose, two SQP iterations.
 TINY_TRACKING = TrackOptions(starts=1, sqp=SqpOptions(max_iterations=2), initialisations=("hold",))
@@ -146,10 +143,8 @@ def holder(tool: str, world: str) -> str:
 
 @functools.cache
 def aligned(tool: str, world: str) -> AlignmentResult:
-    """The tool's synthetic demonstration aligned to its scene (one per pair, shared by the cases);
-    for the scythe its scene's scripted pulls: its synthetic sweeps earn nothing under the authors'
-    cut rule (README, the timed tools)."""
-    demo = pull_demonstration(PULL) if tool == "scythe" else synthesize_demo(tool, seed=SEED)
+    """The tool's synthetic demonstration aligned to its scene (one per pair, shared by the cases)."""
+    demo = synthesize_demo(tool, seed=SEED)
     result = align(demo, tool, world, TINY_ALIGNMENT, seed=SEED, workers=1, progress=False)
     assert result.candidates, f"no candidate for the {tool} in {world} within {TINY_ALIGNMENT.samples} samples"
     return result

@@ -7,7 +7,10 @@ import pytest
 
 from toolimit.demos import DemoError, synthesize_demo, synthesize_motion
 from toolimit.demos.synthetic import DEMONSTRATOR_SCYTHE_LENGTH
-from toolimit.tools import tool_spec
+from toolimit.scenes import make_scene
+from toolimit.scenes.scythe_cut import scythe_cut_rule
+from toolimit.tools import ToolPose, tool_poses, tool_spec
+from toolimit.tools.frame import swing_rotation
 
 CASES = [(seed, 24) for seed in range(6)] + [(6, 30), (7, 30)]
 
@@ -30,7 +33,9 @@ def test_common_properties(tool, seed, fps):
     assert clean.head[:, 2].min() > 0.0 and clean.handle[:, 2].min() > 0.0
     assert clean.speed().max() < 4.5
     # Noise: a few mm everywhere but the outliers, which are 2-6 % of frames and off by > 5 cm.
-    error = np.maximum(np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1))
+    error = np.maximum(
+        np.linalg.norm(noisy.head - clean.head, axis=1), np.linalg.norm(noisy.handle - clean.handle, axis=1)
+    )
     inliers = np.setdiff1d(np.arange(clean.n_frames), motion.outlier_frames)
     assert 0.002 <= motion.jitter <= 0.005
     assert np.median(error[inliers]) < 0.012 and error[inliers].max() < 0.03
@@ -78,22 +83,60 @@ def test_hammer_strikes_the_same_height_fast_and_face_down(seed, fps):
 
 
 @pytest.mark.parametrize("seed, fps", CASES)
-def test_scythe_sweeps_low_wide_and_fast(seed, fps):
+def test_scythe_draws_the_blade_low_towards_the_hands_with_the_snath_nearly_level(seed, fps):
+    """What the authors' cut rule needs (toolimit.scenes.scythe_cut): the snath within 30 degrees of
+    horizontal and the edge moving towards the hands at more than 1 m/s, at most 0.1 m high."""
     motion = synthesize_motion("scythe", seed, fps)
-    demo, sweeps = motion.clean, motion.events["sweeps"]
-    assert 1 <= len(sweeps) <= 3
-    for start, end in sweeps:
-        blade = demo.head[start : end + 1]
-        assert np.all((blade[:, 2] >= 0.02) & (blade[:, 2] <= 0.06))
-        inward = demo.axis[start : end + 1, :2]
-        turned = np.degrees(np.ptp(np.unwrap(np.arctan2(inward[:, 1], inward[:, 0]))))
-        assert 120 <= turned <= 160
-        chord = np.linalg.norm(blade[-1, :2] - blade[0, :2])
-        assert 2 * 0.6 * np.sin(np.radians(60)) <= chord <= 2.0
-        assert 2.0 <= np.linalg.norm(demo.head_velocity()[(start + end) // 2]) <= 4.0
-    if len(sweeps) > 1:  # the mower steps forward between sweeps
-        first, last = demo.head[sweeps[0][0]], demo.head[sweeps[-1][0]]
-        assert 0.1 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7
+    demo, draws = motion.clean, motion.events["sweeps"]
+    assert 1 <= len(draws) <= 2
+    velocity = demo.head_velocity()
+    for start, end in draws:
+        frames = slice(start, end + 1)
+        assert end - start >= 3  # at least three frames of the draw at the video's rate
+        assert np.all((demo.head[frames, 2] >= 0.02) & (demo.head[frames, 2] <= 0.05))
+        elevation = np.degrees(np.arcsin(demo.axis[frames, 2]))
+        assert np.all((elevation >= 5 - 1e-9) & (elevation <= 20 + 1e-9))
+        snath = demo.axis[frames, :2] / np.linalg.norm(demo.axis[frames, :2], axis=1, keepdims=True)
+        towards_hands = np.sum(velocity[frames, :2] * snath, axis=1)  # the head's speed along the snath
+        assert np.all((towards_hands >= 1.5) & (towards_hands <= 2.3))
+        across = np.linalg.norm(velocity[frames, :2] - towards_hands[:, None] * snath, axis=1)
+        assert np.all((across >= 0.3) & (across <= 0.95))  # the body turns: the blade slides along its length
+        turn = snath[0, 0] * snath[-1, 1] - snath[0, 1] * snath[-1, 0]  # z of their cross product
+        assert turn > 0  # right to left: the snath turns counter-clockwise
+    # The head moves towards the hands fastest in the draw: the half second of swing before it and
+    # of follow-through after it ramp that speed up and down.
+    snath = demo.axis[:, :2] / np.linalg.norm(demo.axis[:, :2], axis=1, keepdims=True)
+    towards_hands = np.sum(velocity[:, :2] * snath, axis=1)
+    half_second = int(fps / 2)
+    for start, end in draws:
+        around = np.r_[max(start - half_second, 0) : start, end + 1 : end + 1 + half_second]
+        assert towards_hands[around].max() < towards_hands[start : end + 1].min()
+    if len(draws) > 1:  # the mower steps forward between strokes
+        first, last = demo.head[draws[0][0]], demo.head[draws[-1][0]]
+        assert 0.05 <= np.linalg.norm(last[:2] - first[:2]) <= 0.7
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_scythe_draw_over_the_patch_cuts_every_stalk_by_the_authors_rule(seed):
+    """With the blade level, its tip leading, and the authors' patch (10 stalks in 0.4 x 0.1 m)
+    centred under the edge half-way through the first draw, the demonstrated motion cuts the
+    stalks, and they fall around the draw (from 3 control steps before it to 2 after it)."""
+    motion = synthesize_motion("scythe", seed, fps=24)  # the scene's control rate
+    demo = motion.clean
+    start, end = motion.events["sweeps"][0]
+    middle = (start + end) // 2
+    blade = np.cross([0.0, 0.0, 1.0], demo.axis[middle])
+    blade *= np.sign(blade @ demo.head_velocity()[middle]) / np.linalg.norm(blade)
+    swing = swing_rotation(demo.axis[middle])
+    poses = tool_poses(demo.head, demo.handle, np.arctan2(blade @ swing[:, 1], blade @ swing[:, 0]))
+    edge_centre = poses.position[middle] + poses.rotation[middle] @ scythe_cut_rule(0.005).edge.mean(axis=0)
+    scene, instances = make_scene("scythe", "3d"), 8
+    scene.reset({"grass_position": np.array([*edge_centre[:2], 0.0])}, np.random.default_rng(seed), instances)
+    for position, rotation in zip(poses.position, poses.rotation):
+        scene.step(ToolPose(np.repeat(position[None], instances, 0), np.repeat(rotation[None], instances, 0)))
+    assert scene.goal_reward().mean() >= 9.5
+    steps = scene.cut_time[np.isfinite(scene.cut_time)] / scene.control_dt  # since the first pose
+    assert steps.min() >= start - 3 and steps.max() <= end + 2
 
 
 def test_determinism_and_variety():

@@ -299,65 +299,79 @@ DEMONSTRATOR_SCYTHE_LENGTH = 1.0
 
 
 def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
-    """1-3 low sweeps from right to left around the body, stepping forward between sweeps.
+    """1-2 mowing strokes from right to left, the mower stepping forward between them.
 
-    Coordinates ``q = (theta, radius, head_z, beta, pivot_x, pivot_y)``: the blade (head) at angle
-    ``theta`` (rad, from local +x, counter-clockwise) and ``radius`` (m) around the body's vertical
-    axis through ``(pivot_x, pivot_y)``; the shaft rises at ``beta`` from the blade towards the hands.
+    A stroke, as a mower makes it: the blade swung in from the right, low, then drawn through the
+    grass in front of the body (the *draw*: the body turns left while the arms pull the snath in,
+    so the blade slides along its length and moves towards the hands at 1.6-2.2 m/s), then
+    carried on to the left and lifted. What the authors' tool and cut rule need
+    (:mod:`toolimit.scenes.scythe_cut`): their blade lies in the snath's plane and the edge's
+    normal is the snath, so the snath is held 5-20 degrees above horizontal (a real scythe's snath
+    rises 35-45 degrees over a blade hafted flat) and the draw moves the edge towards the hands.
+
+    Coordinates ``q = (theta, radius, head_z, elevation, pivot_x, pivot_y)``: the head (the blade's
+    root on the snath) at angle ``theta`` (rad, from local +x, counter-clockwise) and ``radius``
+    (m) around the body's vertical axis through ``(pivot_x, pivot_y)``, ``head_z`` m above the
+    ground; the snath points from the head towards that axis, ``elevation`` rad above horizontal.
     """
     L = DEMONSTRATOR_SCYTHE_LENGTH
     deg = np.deg2rad
-    radius = rng.uniform(0.65, 0.95)
-    hand_radius = rng.uniform(0.05, 0.2)
-    beta = np.arccos((radius - hand_radius) / L)
-    arc = deg(rng.uniform(125, 155))
-    centre = deg(rng.uniform(-10, 10))
-    z_cut = rng.uniform(0.025, 0.05)
-    n_sweeps = int(rng.integers(1, 4))
-    peak_speed = [rng.uniform(2.5, 3.5) for _ in range(n_sweeps)]
-    sweep_frames = [max(6, int(round(1.875 * radius * arc / s * fps))) for s in peak_speed]
-    # Fit the sweeps in the length limit (return swings take about 0.9 s each).
-    while n_sweeps > 1 and (sum(sweep_frames[:n_sweeps]) / fps + 0.95 * (n_sweeps - 1) + 1.4) > MAX_DURATION:
-        n_sweeps -= 1
+    elevation = deg(rng.uniform(5, 20))
+    hands_in = rng.uniform(0.15, 0.3)  # hands from the body axis at the end of the draw, m
+    radius_in = hands_in + L * np.cos(elevation)
+    z_cut = rng.uniform(0.02, 0.05)
+    n_strokes = int(rng.integers(1, 3))
 
-    def pose(theta: float, z: float, pivot: np.ndarray) -> np.ndarray:
-        return np.array([theta, radius + rng.uniform(-0.02, 0.02), z, beta + deg(rng.uniform(-2, 2)), *pivot])
+    def rest(theta: float, radius: float, z: float, pivot: np.ndarray) -> np.ndarray:
+        return np.array([theta, radius, z, elevation + deg(rng.uniform(-2, 2)), *pivot])
 
     pivot = np.zeros(2)
-    right, left = centre - arc / 2, centre + arc / 2
     f = 0
-    start = pose(right - deg(rng.uniform(5, 15)), rng.uniform(0.10, 0.18), pivot)
-    knots = [_knot(f, start)]
+    knots: list[Knot] = []
+    draws, pull_speeds, turn_speeds = [], [], []
+    for i in range(n_strokes):
+        pull_speed, turn_speed = rng.uniform(1.6, 2.2), rng.uniform(0.4, 0.8)  # m/s at the head
+        draw_frames = max(3, int(round(rng.uniform(0.2, 0.3) / pull_speed * fps)))
+        pull = pull_speed * draw_frames / fps  # the draw's length along the snath, m
+        radius_out = radius_in + pull
+        omega = turn_speed / (radius_out - pull / 2)  # rad/s
+        centre = deg(rng.uniform(-15, 15))  # where the draw crosses in front of the body
+        draw_start = np.array([centre - omega * draw_frames / fps / 2, radius_out, z_cut, elevation, *pivot])
+        draw_end = draw_start + [omega * draw_frames / fps, -pull, 0.0, 0.0, 0.0, 0.0]
+        velocity = np.array([omega, -pull_speed, 0.0, 0.0, 0.0, 0.0])
+        lead_frames = _frames(rng, 0.45, 0.6, fps, 6)
+        # Swung in from the right and a little further out: the quintic ramps the draw's speed up.
+        wind_up = rest(
+            draw_start[0] - deg(rng.uniform(10, 25)),
+            radius_out + 0.3 * pull_speed * lead_frames / fps,
+            z_cut + rng.uniform(0.0, 0.03),
+            pivot,
+        )
+        if i == 0:
+            knots.append(_knot(f, wind_up))
+            f += _frames(rng, 0.2, 0.35, fps)
+        knots.append(_knot(f, wind_up))
+        f += lead_frames
+        knots.append(_knot(f, draw_start, velocity))
+        draws.append([f, f + draw_frames])
+        f += draw_frames
+        knots.append(_knot(f, draw_end, velocity))
+        follow_frames = _frames(rng, 0.35, 0.5, fps, 5)
+        f += follow_frames
+        follow = rest(
+            draw_end[0] + 0.5 * omega * follow_frames / fps + deg(rng.uniform(15, 30)),
+            radius_in - 0.3 * pull_speed * follow_frames / fps,
+            rng.uniform(0.08, 0.15),
+            pivot,
+        )
+        knots.append(_knot(f, follow))
+        pull_speeds.append(pull_speed)
+        turn_speeds.append(turn_speed)
+        if i < n_strokes - 1:
+            pivot = pivot + rng.uniform(0.15, 0.3) * np.array([np.cos(centre), np.sin(centre)])
+            f += _frames(rng, 0.8, 1.0, fps, 6)  # back to the right, raised, stepping forward
     f += _frames(rng, 0.2, 0.35, fps)
-    knots.append(_knot(f, start))
-    f += _frames(rng, 0.3, 0.45, fps)
-    sweeps = []
-    for i in range(n_sweeps):
-        begin = pose(right, z_cut, pivot)
-        begin[1] = radius
-        knots.append(_knot(f, begin))
-        sweep_start = f
-        f += sweep_frames[i]
-        end = begin.copy()
-        end[0] = left
-        knots.append(_knot(f, end))
-        sweeps.append([sweep_start, f])
-        if i < n_sweeps - 1:
-            step = rng.uniform(0.15, 0.3) * np.array([np.cos(centre), np.sin(centre)])
-            half_return = _frames(rng, 0.4, 0.5, fps, 4)
-            f += half_return
-            middle = pose(0.5 * (left + right), rng.uniform(0.08, 0.15), pivot + 0.5 * step)
-            v_mid = np.zeros(6)
-            v_mid[0] = -arc / (2 * half_return / fps)
-            v_mid[4:] = step / (2 * half_return / fps)
-            knots.append(_knot(f, middle, v_mid))
-            pivot = pivot + step
-            f += _frames(rng, 0.4, 0.5, fps, 4)
-    f += _frames(rng, 0.3, 0.45, fps)
-    lifted = pose(left + deg(rng.uniform(0, 10)), rng.uniform(0.10, 0.2), pivot)
-    knots.append(_knot(f, lifted))
-    f += _frames(rng, 0.2, 0.35, fps)
-    knots.append(_knot(f, lifted))
+    knots.append(_knot(f, knots[-1].q))
 
     def points(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         theta, r, z, b = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
@@ -369,13 +383,14 @@ def scythe_knots(rng: np.random.Generator, fps: float) -> KnotMotion:
 
     params = {
         "cut_height": z_cut,
-        "radius": radius,
-        "arc": arc,
-        "sweeps": n_sweeps,
-        "peak_speed_min": min(peak_speed[:n_sweeps]),
-        "peak_speed_max": max(peak_speed[:n_sweeps]),
+        "snath_elevation": elevation,
+        "strokes": n_strokes,
+        "pull_speed_min": min(pull_speeds),
+        "pull_speed_max": max(pull_speeds),
+        "turn_speed_min": min(turn_speeds),
+        "turn_speed_max": max(turn_speeds),
     }
-    return knots, points, {"sweeps": sweeps}, params
+    return knots, points, {"sweeps": draws}, params
 
 
 # --- noise -------------------------------------------------------------------------------------
