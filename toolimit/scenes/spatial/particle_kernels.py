@@ -158,16 +158,15 @@ def _boxes_correction(start, end, centers, rotations, halves, bounds, radius, mu
     return touching
 
 
-@_jit
-def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+@_inline
+def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients, total, inv_mass):  # type: ignore[no-untyped-def]
     """One averaged Jacobi pass over instance b's candidate sphere pairs, with mass scaling and
-    friction; updates ``predicted[b]`` in place."""
+    friction; updates ``predicted[b]`` in place. ``total`` (N, 4), ``inv_mass`` (N,): work space."""
     now, before, listed = predicted[b], previous[b], pairs[b]
     n = now.shape[0]
     r2 = 2.0 * coefficients[RADIUS]
     mu_s, mu_k, k_mass = coefficients[MU_SPHERE_S], coefficients[MU_SPHERE_K], coefficients[MASS_SCALING]
-    total = np.zeros((n, 4))  # summed corrections (x, y, z) and number of contacts
-    inv_mass = np.empty(n)
+    total[:] = 0.0  # summed corrections (x, y, z) and number of contacts
     for i in range(n):
         inv_mass[i] = math.exp(k_mass * now[i, 2])
     for p in range(n_pairs[b]):
@@ -207,12 +206,13 @@ def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: i
 
 
 @_jit
-def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients):  # type: ignore[no-untyped-def]
+def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients, pair_work, scratch):  # type: ignore[no-untyped-def]
     """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
     ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
     at its end), then the walls and the ground again without friction, so that static surfaces
     win. ``tool``: the tool's shape arrays (see :func:`advance`); ``walls``: the walls' centers,
-    rotations, half extents and bounds. Updates ``predicted[b]`` in place."""
+    rotations, half extents and bounds; ``pair_work`` (N, 5) and ``scratch`` (27,): work space.
+    Updates ``predicted[b]`` in place."""
     (
         box_centers,
         box_rotations,
@@ -227,8 +227,8 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, t
     n = predicted.shape[1]
     radius = coefficients[RADIUS]
     if n_pairs[b]:
-        _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients)
-    start, end, moved, scratch = np.empty(3), np.empty(3), np.empty(3), np.empty(18)
+        _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients, pair_work[:, 0:4], pair_work[:, 4])
+    start, end, moved, scratch = scratch[0:3], scratch[3:6], scratch[6:9], scratch[9:27]
     # Static surfaces with friction before the tool (so friction never drags a sphere into it) ...
     mu_s, mu_k = coefficients[MU_GROUND_S], coefficients[MU_GROUND_K]
     for i in range(n):
@@ -369,45 +369,61 @@ def _rebuild_pairs(b, positions, built_at, pairs, n_pairs, reach):  # type: igno
     return True
 
 
-@_jit
-def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
-    """Rebuild the Verlet list of every instance one of whose spheres moved half the margin since
-    its last build (so no unlisted pair can touch). Returns False if ``pairs`` is too small."""
+@_inline
+def _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+    """Rebuild instance b's Verlet list if one of its spheres moved half the margin since its
+    last build (so no unlisted pair can touch). Returns False (the list marked -1: rebuild) if
+    ``pairs`` is too small."""
     margin = coefficients[PAIR_MARGIN]
-    reach = 2.0 * coefficients[RADIUS] + margin
     limit = (0.5 * margin) ** 2
-    for b in range(positions.shape[0]):
-        stale = n_pairs[b] < 0
-        for i in range(positions.shape[1]):
-            if stale:
-                break
-            dx = positions[b, i, 0] - built_at[b, i, 0]
-            dy = positions[b, i, 1] - built_at[b, i, 1]
-            dz = positions[b, i, 2] - built_at[b, i, 2]
-            stale = dx * dx + dy * dy + dz * dz >= limit
-        if stale and not _rebuild_pairs(b, positions, built_at, pairs, n_pairs, reach):
-            n_pairs[b] = -1
-            return False
+    stale = n_pairs[b] < 0
+    for i in range(positions.shape[1]):
+        if stale:
+            break
+        dx = positions[b, i, 0] - built_at[b, i, 0]
+        dy = positions[b, i, 1] - built_at[b, i, 1]
+        dz = positions[b, i, 2] - built_at[b, i, 2]
+        stale = dx * dx + dy * dy + dz * dz >= limit
+    if stale and not _rebuild_pairs(b, positions, built_at, pairs, n_pairs, 2.0 * coefficients[RADIUS] + margin):
+        n_pairs[b] = -1
+        return False
     return True
 
 
 @_jit
-def _tool_far(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
-    """Whether the tool is surely too far from every sphere of instance b (at rest) for
-    :func:`_in_tool_frame` to find one not clear of its grown bounds during the sub-step: a bound
-    on the whole sand (its axis-aligned box), so that most sub-steps need no test per sphere.
+def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+    """:func:`_fresh_pairs` for every instance. Returns False if ``pairs`` is too small."""
+    for b in range(positions.shape[0]):
+        if not _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):
+            return False
+    return True
+
+
+@_inline
+def _sand_bounds(b, positions, bounds):  # type: ignore[no-untyped-def]
+    """Instance b's spheres' axis-aligned bounds into ``bounds`` (2, 3): lower, upper (m)."""
+    for a in range(3):
+        bounds[0, a] = np.inf
+        bounds[1, a] = -np.inf
+    for i in range(positions.shape[1]):
+        for a in range(3):
+            bounds[0, a] = min(bounds[0, a], positions[b, i, a])
+            bounds[1, a] = max(bounds[1, a], positions[b, i, a])
+
+
+@_jit
+def _tool_far(b, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
+    """Whether the tool is surely too far from every sphere of instance b (at rest, within the
+    bounds ``sand`` (2, 3) of :func:`_sand_bounds`) for :func:`_in_tool_frame` to find one not
+    clear of its grown bounds during the sub-step: a bound on the whole sand, so that most
+    sub-steps need no test per sphere.
 
     A resting sphere x has tool-frame end points at distances |x - c0|, |x - c1| from the bounds'
     centre c (world c0 at the start, c1 at the end), at most L = |p1 - p0| + |r1 - r0| |x - p0|
     apart (|r1 - r0| = sqrt(3 - trace(r0^T r1)) for rotations); the segment between them is clear
     along some axis if it stays beyond R + L of c, R the bounds' half diagonal (tested with
     margin: the nearest end point beyond R + 2 L, from the bound on the sand)."""
-    low = np.full(3, np.inf)
-    high = np.full(3, -np.inf)
-    for i in range(positions.shape[1]):
-        for a in range(3):
-            low[a] = min(low[a], positions[b, i, a])
-            high[a] = max(high[a], positions[b, i, a])
+    low, high = sand[0], sand[1]
     trace = 0.0
     for a in range(3):
         for c in range(3):
@@ -433,16 +449,101 @@ def _tool_far(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignor
 
 
 @_jit
-def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
+def _tool_reaches(b, positions, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
     """Whether a sphere of instance b meets the tool's grown bounds during the sub-step (the same
-    answer as testing every sphere; :func:`_tool_far` spares the test in most sub-steps)."""
-    if _tool_far(b, positions, p0, r0, p1, r1, tool_low, tool_high):
+    answer as testing every sphere; :func:`_tool_far` on the sand's bounds ``sand`` (2, 3)
+    spares the test in most sub-steps)."""
+    if _tool_far(b, sand, p0, r0, p1, r1, tool_low, tool_high):
         return False
     start, end = np.empty(3), np.empty(3)
     for i in range(positions.shape[1]):
         if not _in_tool_frame(b, i, positions, positions, p0, r0, p1, r1, tool_low, tool_high, start, end):
             return True
     return False
+
+
+@_inline
+def _advance_instance(
+    b,
+    positions,
+    carried,
+    velocities,
+    predicted,
+    built_at,
+    pairs,
+    n_pairs,
+    resting,
+    progress,
+    h,
+    has_tool,
+    path_positions,
+    path_rotations,
+    tool,
+    walls,
+    coefficients,
+    freeze_after,
+):  # type: ignore[no-untyped-def]
+    """Sub-steps ``progress[b]`` .. S-1 of instance b (see :func:`advance`)."""
+    n = positions.shape[1]
+    sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2
+    max_speed, gravity = coefficients[MAX_SPEED], coefficients[GRAVITY]
+    pair_work, scratch, sand = np.empty((n, 5)), np.empty(27), np.empty((2, 3))
+    sand_known = False  # whether ``sand`` holds the bounds of the spheres' current positions
+    n_substeps = path_positions.shape[0] - 1
+    for s in range(progress[b], n_substeps):
+        if not _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):
+            progress[b] = s
+            return
+        p0, r0, p1, r1 = path_positions[s], path_rotations[s], path_positions[s + 1], path_rotations[s + 1]
+        if freeze_after > 0 and resting[b] >= freeze_after:
+            if has_tool and not sand_known:
+                _sand_bounds(b, positions, sand)
+                sand_known = True
+            if not has_tool or not _tool_reaches(b, positions, sand, p0, r0, p1, r1, tool[7], tool[8]):
+                continue  # island sleeping: this instance is at rest and untouched
+        sand_known = False
+        for i in range(n):
+            carried[b, i, 2] -= gravity * h
+            for a in range(3):
+                predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
+        _project(
+            b,
+            positions,
+            predicted,
+            pairs,
+            n_pairs,
+            has_tool,
+            p0,
+            r0,
+            p1,
+            r1,
+            tool,
+            walls,
+            coefficients,
+            pair_work,
+            scratch,
+        )
+        awake_any = False
+        for i in range(n):
+            dx = predicted[b, i, 0] - positions[b, i, 0]
+            dy = predicted[b, i, 1] - positions[b, i, 1]
+            dz = predicted[b, i, 2] - positions[b, i, 2]
+            speed2 = dx * dx + dy * dy + dz * dz
+            awake = speed2 >= sleep2
+            scale = 1.0 / h
+            if max_speed > 0.0 and speed2 > (max_speed * h) ** 2:
+                scale = max_speed / math.sqrt(speed2)
+            carried[b, i, 0], carried[b, i, 1], carried[b, i, 2] = dx * scale, dy * scale, dz * scale
+            if awake:
+                awake_any = True
+                for a in range(3):
+                    positions[b, i, a] = predicted[b, i, a]
+                    velocities[b, i, a] = carried[b, i, a]
+            else:
+                for a in range(3):
+                    velocities[b, i, a] = 0.0
+        resting[b] = 0 if awake_any else resting[b] + 1
+    progress[b] = n_substeps
 
 
 @_jit
@@ -454,7 +555,7 @@ def advance(
     pairs,
     n_pairs,
     resting,
-    first_substep,
+    progress,
     h,
     has_tool,
     path_positions,
@@ -464,57 +565,40 @@ def advance(
     coefficients,
     freeze_after,
 ):  # type: ignore[no-untyped-def]
-    """Sub-steps ``first_substep`` .. S-1 of length h (s) for all instances, the tool moving along
-    ``path_positions`` (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3). Updates the state arrays in
-    place. Returns -1 when done, or the sub-step at which ``pairs`` proved too small (nothing of
-    that sub-step was simulated yet: grow ``pairs`` and call again from there).
+    """Sub-steps of length h (s) for all instances, the tool moving along ``path_positions``
+    (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3): instance b from sub-step ``progress[b]`` on
+    (B,), to S, or to the sub-step at which its ``pairs`` proved too small (nothing of that
+    sub-step simulated yet: grow ``pairs`` and call again). Updates the state arrays and
+    ``progress`` in place. Instances are independent: each one's sub-steps run one after the
+    other, in the order of the scheme.
 
     ``tool`` is the tuple (box centers, rotations, half extents, bounds, capsule starts, ends,
     radii, low, high) of the tool's shapes in its frame with its bounds grown by the sphere radius,
     ``walls`` the tuple (centers, rotations, half extents, bounds) of each instance's static boxes
     (B, K, ...), world frame.
     """
-    n_batch, n = positions.shape[0], positions.shape[1]
-    sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2
-    max_speed, gravity = coefficients[MAX_SPEED], coefficients[GRAVITY]
     predicted = np.empty_like(positions)
-    for s in range(first_substep, path_positions.shape[0] - 1):
-        if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
-            return s
-        p0, r0, p1, r1 = path_positions[s], path_rotations[s], path_positions[s + 1], path_rotations[s + 1]
-        for b in range(n_batch):
-            if (
-                freeze_after > 0
-                and resting[b] >= freeze_after
-                and (not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool[7], tool[8]))
-            ):
-                continue  # island sleeping: this instance is at rest and untouched
-            for i in range(n):
-                carried[b, i, 2] -= gravity * h
-                for a in range(3):
-                    predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
-            _project(b, positions, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients)
-            awake_any = False
-            for i in range(n):
-                dx = predicted[b, i, 0] - positions[b, i, 0]
-                dy = predicted[b, i, 1] - positions[b, i, 1]
-                dz = predicted[b, i, 2] - positions[b, i, 2]
-                speed2 = dx * dx + dy * dy + dz * dz
-                awake = speed2 >= sleep2
-                scale = 1.0 / h
-                if max_speed > 0.0 and speed2 > (max_speed * h) ** 2:
-                    scale = max_speed / math.sqrt(speed2)
-                carried[b, i, 0], carried[b, i, 1], carried[b, i, 2] = dx * scale, dy * scale, dz * scale
-                if awake:
-                    awake_any = True
-                    for a in range(3):
-                        positions[b, i, a] = predicted[b, i, a]
-                        velocities[b, i, a] = carried[b, i, a]
-                else:
-                    for a in range(3):
-                        velocities[b, i, a] = 0.0
-            resting[b] = 0 if awake_any else resting[b] + 1
-    return -1
+    for b in range(positions.shape[0]):
+        _advance_instance(
+            b,
+            positions,
+            carried,
+            velocities,
+            predicted,
+            built_at,
+            pairs,
+            n_pairs,
+            resting,
+            progress,
+            h,
+            has_tool,
+            path_positions,
+            path_rotations,
+            tool,
+            walls,
+            coefficients,
+            freeze_after,
+        )
 
 
 @_jit
@@ -535,6 +619,7 @@ def place(
     the tool still at its pose (B, 3), (B, 3, 3); ``tool`` and ``walls`` as in :func:`advance`.
     Returns False if ``pairs`` proved too small (grow it and call again)."""
     predicted = positions.copy()
+    pair_work, scratch = np.empty((positions.shape[1], 5)), np.empty(27)
     for _ in range(iterations):
         if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
             return False
@@ -555,6 +640,8 @@ def place(
                 tool,
                 walls,
                 coefficients,
+                pair_work,
+                scratch,
             )
         positions[...] = predicted
     return True

@@ -382,9 +382,9 @@ class ParticleWorld:
             path_rotations = np.broadcast_to(np.eye(3), (substeps + 1, b, 3, 3))
         path_positions = np.ascontiguousarray(path_positions, dtype=float)
         path_rotations = np.ascontiguousarray(path_rotations, dtype=float)
-        first = 0
+        progress = np.zeros(b, dtype=np.int64)  # (B,) each instance's next sub-step
         while True:
-            first = kernels.advance(
+            kernels.advance(
                 self.positions,
                 self._carried,
                 self.velocities,
@@ -392,7 +392,7 @@ class ParticleWorld:
                 self._pairs,
                 self._n_pairs,
                 self._resting,
-                first,
+                progress,
                 h,
                 has_tool,
                 path_positions,
@@ -402,6 +402,6 @@ class ParticleWorld:
                 self._coefficients,
                 self._freeze_after,
             )
-            if first < 0:
+            if np.all(progress == substeps):
                 return
             self._grow_pairs()
