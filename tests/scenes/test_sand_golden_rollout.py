@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from toolimit.learn import TaskSimulator, shipped_task
 
@@ -30,9 +31,10 @@ BATCH, SEED, NOISE_RAD_S = 8, 0, 0.2
 TOLERANCE = 1e-9
 
 
-def sand_rollout() -> dict[str, np.ndarray]:
-    """The two recorded episodes, computed now (see the module docstring)."""
-    simulator = TaskSimulator(shipped_task("spade", "3d"), BATCH)
+def sand_rollout(threads: int = 1) -> dict[str, np.ndarray]:
+    """The two recorded episodes, computed now with the instances shared out among ``threads``
+    threads (see the module docstring)."""
+    simulator = TaskSimulator(shipped_task("spade", "3d"), BATCH, scene_kwargs={"threads": threads})
     reset_rng, action_rng = np.random.default_rng(SEED), np.random.default_rng(SEED + 1)
     noise = NOISE_RAD_S / simulator.robot.velocity_limit
     record: dict[str, np.ndarray] = {}
@@ -54,9 +56,10 @@ def sand_rollout() -> dict[str, np.ndarray]:
     return record
 
 
-def test_the_spade_sand_follows_the_recorded_rollout() -> None:
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_spade_sand_follows_the_recorded_rollout(threads: int) -> None:
     expected = np.load(GOLDEN)
-    actual = sand_rollout()
+    actual = sand_rollout(threads)
     assert sorted(actual) == sorted(expected.files)
     assert actual["tracking_goal_rewards"].max() >= 10, "the recorded scoop delivers sand: the check sees contacts"
     for name in expected.files:

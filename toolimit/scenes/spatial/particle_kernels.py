@@ -28,6 +28,8 @@ SLEEP_SPEED, MAX_SPEED, PAIR_MARGIN, GRAVITY = 11, 12, 13, 14
 N_COEFFICIENTS = 15
 
 _jit = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+#: Instances stepped on several threads (numba's ``prange``): they share nothing.
+_parallel = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", parallel=True)
 #: Small helpers called per sphere and per shape are inlined by numba: a call that passes arrays
 #: costs reference counting, several times the work of the helper itself (3x the whole step).
 _inline = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", inline="always")
@@ -411,7 +413,7 @@ def _sand_bounds(b, positions, bounds):  # type: ignore[no-untyped-def]
             bounds[1, a] = max(bounds[1, a], positions[b, i, a])
 
 
-@_jit
+@_inline
 def _tool_far(b, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
     """Whether the tool is surely too far from every sphere of instance b (at rest, within the
     bounds ``sand`` (2, 3) of :func:`_sand_bounds`) for :func:`_in_tool_frame` to find one not
@@ -448,7 +450,7 @@ def _tool_far(b, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-
     return min(math.sqrt(near0), math.sqrt(near1)) - apart > half_diagonal + 2.0 * apart + 1e-9
 
 
-@_jit
+@_inline
 def _tool_reaches(b, positions, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
     """Whether a sphere of instance b meets the tool's grown bounds during the sub-step (the same
     answer as testing every sphere; :func:`_tool_far` on the sand's bounds ``sand`` (2, 3)
@@ -546,8 +548,7 @@ def _advance_instance(
     progress[b] = n_substeps
 
 
-@_jit
-def advance(
+def _advance(
     positions,
     carried,
     velocities,
@@ -578,7 +579,7 @@ def advance(
     (B, K, ...), world frame.
     """
     predicted = np.empty_like(positions)
-    for b in range(positions.shape[0]):
+    for b in nb.prange(positions.shape[0]):
         _advance_instance(
             b,
             positions,
@@ -599,6 +600,11 @@ def advance(
             coefficients,
             freeze_after,
         )
+
+
+#: :func:`_advance` on the calling thread, and on numba's threads (instances shared out among them).
+advance = _jit(_advance)
+advance_on_threads = _parallel(_advance)
 
 
 @_jit

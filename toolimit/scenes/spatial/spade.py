@@ -84,6 +84,7 @@ from toolimit.scenes.spatial.particles import (
     GranularMaterial,
     ParticleWorld,
     StaticBoxes,
+    checked_threads,
 )
 from toolimit.scenes.spatial.tool_geometry import (
     SPADE_BLADE_LENGTH,
@@ -207,6 +208,8 @@ class SpatialSpadeScene(SceneBase):
         substeps: physics sub-steps per control step (10 -> 240 Hz).
         material: sphere constants (radius, friction, ...); default the original scene's sand.
         control_dt: see :class:`~toolimit.scenes.base.SceneBase`.
+        threads: threads stepping the instances (:class:`ParticleWorld`; the same sand whatever
+            their count).
     """
 
     tool = "spade"
@@ -218,12 +221,14 @@ class SpatialSpadeScene(SceneBase):
         substeps: int = 10,
         material: GranularMaterial = AUTHORS_SAND,
         control_dt: float = 1.0 / CONTROL_FPS,
+        threads: int = 1,
     ) -> None:
         if not 1 <= int(n_spheres) <= MAX_SPHERES:
             raise ValueError(f"n_spheres must be in 1..{MAX_SPHERES}, got {n_spheres!r}")
         super().__init__(control_dt, substeps)
         self.n_spheres = int(n_spheres)
         self.material = material
+        self.threads = checked_threads(threads)
         self.shapes = tool_shapes("spade")
         self.parameters = (
             world_position("sand_position", "centre of the sand deposit's floor", axes=(0, 1)),
@@ -293,7 +298,7 @@ class SpatialSpadeScene(SceneBase):
         )
         heap = settled_heap(self.n_spheres, self.material, self.substeps)
         shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
-        self._world = ParticleWorld(self.material, self.walls, self.shapes)
+        self._world = ParticleWorld(self.material, self.walls, self.shapes, self.threads)
         self._world.reset(self.sand_position + (heap + shift) @ deposit_rotation.T)
         self._goal_reward = None
         #: Steps that ended with >= SUCCESS_SPHERES in the box.
