@@ -651,3 +651,19 @@ def place(
             )
         positions[...] = predicted
     return True
+
+
+@_jit
+def in_box_counts(positions, floor_centers, half_side, height):  # type: ignore[no-untyped-def]
+    """(B,) float: per instance, the sphere centres (B, N, 3) within ``half_side`` (m) of the box's
+    floor centre (B, 3) in x and y and between 0 and ``height`` (m) above it (the spade's goal
+    region; the same comparisons as the array expression, without its temporaries)."""
+    counts = np.zeros(positions.shape[0])
+    for b in range(positions.shape[0]):
+        for i in range(positions.shape[1]):
+            dx = positions[b, i, 0] - floor_centers[b, 0]
+            dy = positions[b, i, 1] - floor_centers[b, 1]
+            dz = positions[b, i, 2] - floor_centers[b, 2]
+            if abs(dx) < half_side and abs(dy) < half_side and dz >= 0.0 and dz <= height:
+                counts[b] += 1.0
+    return counts

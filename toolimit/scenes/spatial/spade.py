@@ -80,6 +80,7 @@ from toolimit.scenes.base import (
     parameter_violation,
     world_position,
 )
+from toolimit.scenes.spatial.particle_kernels import in_box_counts
 from toolimit.scenes.spatial.particles import (
     GranularMaterial,
     ParticleWorld,
@@ -390,7 +391,8 @@ class SpatialSpadeScene(SceneBase):
         """(B,) number of spheres in the goal box (counted once per state: the step's success
         record and the learner both ask)."""
         if self._goal_reward is None:
-            self._goal_reward = np.sum(self.spheres_in_box(), axis=1).astype(float)
+            world = self._require_reset()
+            self._goal_reward = in_box_counts(world.positions, self.goal_position, GOAL_INNER / 2, GOAL_REGION_HEIGHT)
         return self._goal_reward.copy()
 
     def dense_reward(self) -> np.ndarray:
