@@ -208,7 +208,9 @@ def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients, total, inv_
 
 
 @_jit
-def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients, pair_work, scratch):  # type: ignore[no-untyped-def]
+def _project(
+    b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients, pair_work, scratch
+):  # type: ignore[no-untyped-def]
     """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
     ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
     at its end), then the walls and the ground again without friction, so that static surfaces
@@ -394,8 +396,9 @@ def _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):  # type:
 
 @_jit
 def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
-    """:func:`_fresh_pairs` for every instance. Returns False if ``pairs`` is too small."""
-    for b in range(positions.shape[0]):
+    """:func:`_fresh_pairs` for every instance, in order (stopping at the first whose ``pairs``
+    proved too small). Returns False if ``pairs`` is too small."""
+    for b in range(positions.shape[0]):  # noqa: SIM110 (numba: no generator into all())
         if not _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):
             return False
     return True
