@@ -1,9 +1,19 @@
 """Compiled (numba) kernels of the particle solver of :mod:`toolimit.scenes.spatial.particles`.
 
 The scheme, the contact groups and their order are documented there; this module only holds the
-loops, written per sphere so that numba compiles them to plain machine code (one core, no
-temporaries). Every function works on one instance ``b`` of the batched arrays at a time, in the
-world frame, metres and seconds, except where a name says *local* (a box's or the tool's frame).
+loops, written per sphere so that numba compiles them to plain machine code (no temporaries).
+Every function works on one instance ``b`` of the batched arrays at a time, in the world frame,
+metres and seconds, except where a name says *local* (a box's or the tool's frame). Instances share
+nothing, so :func:`advance` runs each one's sub-steps one after the other (its spheres stay in the
+cache) and :func:`advance_on_threads` shares the instances out among numba's threads: the same
+numbers, bit for bit, whatever their count (``tests/scenes/test_sand_golden_rollout.py``).
+
+Where the time goes (Panda spade task, B = 16, 200 spheres, one core): the sphere pairs' Jacobi pass
+about 40 % of a simulated sub-step, the two wall passes 30 %, the tool's per-sphere test 10 %, the
+Verlet lists 5-20 % (20 % while the blade stirs the sand). With the fresh policy of
+``benchmarks/learning_throughput.py`` the blade never reaches the sand, yet 86 % of the kernels'
+time falls in each episode's first 100 steps: the cached heap, settled in a 0.36 m pen, slumps in
+the 0.4 m deposit until about step 100-150, after which island sleeping skips it.
 
 Kernels are compiled on first use and cached on disk (``cache=True``), so only the first import on
 a machine pays the compile time. They keep IEEE arithmetic (no ``fastmath``): with it, the kernels

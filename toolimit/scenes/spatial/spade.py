@@ -14,7 +14,10 @@ World frame: metres, z up, ground z = 0. The scene is the original experiments' 
   original, dropped once from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of
   height), simulated to rest and cached (:func:`settled_heap`), then moved to the deposit at
   every reset, each instance shifted by its own seeded offset of up to +-2 cm in x and y (the
-  instances' own randomness; a shifted heap is still at rest);
+  instances' own randomness). At 200 spheres the heap is not at rest in the deposit: 20 spheres
+  leaned on the pen's walls, 2 cm inside the deposit's, and it slumps by up to 7 cm over the first
+  100-150 steps of every episode (measured; it costs most of the sand's time when the blade stays
+  away, :mod:`toolimit.scenes.spatial.particle_kernels`);
 * the sand (:data:`AUTHORS_SAND`): spheres that do not rotate (the original damps their rotation),
   sphere-sphere friction 5, sphere-spade and sphere-ground 2.5 (PhysX averages 5 with the spade's
   and the ground's 0.1), sphere-wall 3 (average of 5 and 1), speed capped at 1 m/s, 240 Hz (10
