@@ -10,7 +10,7 @@ World frame: metres, z up, ground z = 0. The scene is the original experiments' 
   ``GOAL_WALL_HEIGHT`` (7 cm) high, axis-aligned, centred at ``goal_position``; the ground is its
   floor. ``goal_position`` may be (B, 3), one box per instance (domain randomisation): each
   instance then has its own wall set (same count, same cost), and the goal region follows it;
-* ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap** at rest: as in the
+* ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap**: as in the
   original, dropped once from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of
   height), simulated to rest and cached (:func:`settled_heap`), then moved to the deposit at
   every reset, each instance shifted by its own seeded offset of up to +-2 cm in x and y (the
