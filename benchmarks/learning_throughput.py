@@ -23,7 +23,9 @@ ceiling included; with a core free, 2 threads were 1.3x (training) to 1.5x (ceil
 :class:`~toolimit.learn.split_simulator.SplitSimulator` (shared buffers, one byte on a pipe per
 step and worker; the same numbers as one process): on the Panda spade, 5,294 against 5,853
 steps/s for one process with the second core busy with other jobs (load average about 3); an
-earlier version of this option (pipes, pickled results per step) was no faster either.
+earlier version of this option (pipes, pickled results per step) was no faster either;
+``--sim-threads N`` shares the 3D spade's instances out among N numba threads inside each process
+(the scene keyword ``threads``; the same numbers bit for bit).
 
 Prints steps per second (wall clock; CPU seconds of the main process alongside), the split, writes
 ``benchmarks/results/learning_throughput_<name>.json`` and ends with ``ratio R``. Keep the budget
