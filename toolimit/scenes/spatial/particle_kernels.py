@@ -39,8 +39,10 @@ SLEEP_SPEED, MAX_SPEED, PAIR_MARGIN, GRAVITY = 11, 12, 13, 14
 N_COEFFICIENTS = 15
 
 _jit = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
-#: Instances stepped on several threads (numba's ``prange``): they share nothing.
-_parallel = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", parallel=True)
+#: Instances stepped on several threads (numba's ``prange``): they share nothing. Not cached: numba
+#: keys its disk cache by function and signature, not by ``parallel``, so a cached threaded build
+#: of :func:`_advance` would replace the single-threaded one (and be loaded for it).
+_parallel = nb.njit(cache=False, nogil=True, fastmath=False, error_model="numpy", parallel=True)
 #: Small helpers called per sphere and per shape are inlined by numba: a call that passes arrays
 #: costs reference counting, several times the work of the helper itself (3x the whole step).
 _inline = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", inline="always")
