@@ -23,7 +23,9 @@ ceiling included; with a core free, 2 threads were 1.3x (training) to 1.5x (ceil
 :class:`~toolimit.learn.split_simulator.SplitSimulator` (shared buffers, one byte on a pipe per
 step and worker; the same numbers as one process): on the Panda spade, 5,294 against 5,853
 steps/s for one process with the second core busy with other jobs (load average about 3); an
-earlier version of this option (pipes, pickled results per step) was no faster either.
+earlier version of this option (pipes, pickled results per step) was no faster either;
+``--sim-threads N`` shares the 3D spade's instances out among N numba threads inside each process
+(the scene keyword ``threads``; the same numbers bit for bit).
 
 Prints steps per second (wall clock; CPU seconds of the main process alongside), the split, writes
 ``benchmarks/results/learning_throughput_<name>.json`` and ends with ``ratio R``. Keep the budget
@@ -243,9 +245,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                              "fastest)")
     parser.add_argument("--processes", type=int, default=1,
                         help="processes stepping the instances (default: 1, the library's default)")
+    parser.add_argument("--sim-threads", type=int, default=1,
+                        help="threads stepping the sand's instances inside each process (the 3D spade's "
+                             "scene_kwargs threads; the same numbers; default: 1)")
     parser.add_argument("--repeats", type=int, default=2,
                         help="timed runs of each, interleaved; the fastest of each is kept (default: 2)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default=None,
+                        help="results JSON (default: benchmarks/results/learning_throughput_<name>.json)")
     args = parser.parse_args(argv)
     if min(args.envs, args.timesteps, args.repeats) < 1 or args.threads < 0:
         sys.exit("--envs, --timesteps and --repeats must be >= 1, --threads >= 0")
@@ -256,9 +263,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not 1 <= processes <= args.envs:
         sys.exit(f"--processes {processes}: must be in 1..--envs ({args.envs})")
     print(f"{name}: {task.robot} {task.tool} ({task.world}), horizon {task.horizon}, B = {args.envs}, "
-          f"preset {args.preset}, torch threads {torch.get_num_threads()}, processes {processes}")
+          f"preset {args.preset}, torch threads {torch.get_num_threads()}, processes {processes}, "
+          f"simulation threads {args.sim_threads}")
 
-    env = BatchedTaskVecEnv(task, args.envs, seed=args.seed, processes=processes)
+    scene_kwargs = {"threads": args.sim_threads} if args.sim_threads != 1 else None
+    env = BatchedTaskVecEnv(task, args.envs, seed=args.seed, processes=processes, scene_kwargs=scene_kwargs)
     try:
         learners = Learner(env, args.preset, args.seed), \
             Learner(TrivialVecEnv(TaskSimulator(task, 1), args.envs), args.preset, args.seed)
@@ -274,16 +283,16 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     print(_split("training", training))
     print(_split("ceiling ", ceiling))
-    if processes == 1:  # the second process's CPU time is not the main process's
+    if processes == 1:  # the second process's CPU time is not the main process's (the threads' is)
         print(f"per CPU second of the main process: training / ceiling = {cpu_ratio:.2f}")
     record = {"name": name, "robot": task.robot, "tool": task.tool, "world": task.world, "horizon": task.horizon,
               "envs": args.envs, "preset": args.preset, "torch_threads": torch.get_num_threads(),
-              "processes": processes, "training": training.record(), "ceiling": ceiling.record(), "ratio": ratio,
+              "processes": processes, "sim_threads": args.sim_threads, "training": training.record(), "ceiling": ceiling.record(), "ratio": ratio,
               "cpu_ratio": cpu_ratio if processes == 1 else None, "repeats": args.repeats,
               "load_average": list(os.getloadavg())}
-    out = RESULTS / f"learning_throughput_{name}.json"
+    out = Path(args.out) if args.out else RESULTS / f"learning_throughput_{name}.json"
     save_json(out, record)
-    print(f"wrote {out.relative_to(REPO)}")
+    print(f"wrote {out}")
     print(f"ratio {ratio:.2f}")
     return 0
 

@@ -211,8 +211,9 @@ def test_the_tools_far_bound_never_hides_a_sphere_it_reaches():
             not kernels._in_tool_frame(0, i, positions, positions, p0, r0, p1, r1, low, high, start, end)
             for i in range(30)
         )
-        far = kernels._tool_far(0, positions, p0, r0, p1, r1, low, high)
+        sand = np.array([positions[0].min(axis=0), positions[0].max(axis=0)])
+        far = kernels._tool_far(0, sand, p0, r0, p1, r1, low, high)
         assert not (far and every)
-        assert kernels._tool_reaches(0, positions, p0, r0, p1, r1, low, high) == every
+        assert kernels._tool_reaches(0, positions, sand, p0, r0, p1, r1, low, high) == every
         answers.add((far, every))
     assert {(True, False), (False, True), (False, False)} <= answers  # both ways, and the bound's slack

@@ -128,6 +128,7 @@ def test_scripted_scoop_carry_tip_moves_at_least_ten_spheres_into_the_box(scoope
     offset = snap["sphere_positions"] - PARAMS["goal_position"]
     in_box = (np.abs(offset[:, :2]).max(axis=1) < GOAL_INNER / 2) & (offset[:, 2] <= 0.1)
     assert in_box.sum() == rewards[0]
+    assert np.array_equal(rewards, scooped.spheres_in_box().sum(axis=1))  # the compiled count, the array test
 
 
 def test_success_needs_ten_spheres_for_half_of_the_steps(scooped: SpatialSpadeScene) -> None:

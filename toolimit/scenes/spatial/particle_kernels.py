@@ -1,9 +1,20 @@
 """Compiled (numba) kernels of the particle solver of :mod:`toolimit.scenes.spatial.particles`.
 
 The scheme, the contact groups and their order are documented there; this module only holds the
-loops, written per sphere so that numba compiles them to plain machine code (one core, no
-temporaries). Every function works on one instance ``b`` of the batched arrays at a time, in the
-world frame, metres and seconds, except where a name says *local* (a box's or the tool's frame).
+loops, written per sphere so that numba compiles them to plain machine code (no temporaries).
+Every function works on one instance ``b`` of the batched arrays at a time, in the world frame,
+metres and seconds, except where a name says *local* (a box's or the tool's frame). Instances share
+nothing, so :func:`advance` runs each one's sub-steps one after the other (its spheres stay in the
+cache) and :func:`advance_on_threads` shares the instances out among numba's threads: the same
+numbers, bit for bit, whatever their count (``tests/scenes/test_sand_golden_rollout.py``).
+
+Where the time goes (Panda spade task, B = 16, 200 spheres, one core): the sphere pairs' Jacobi pass
+about 40 % of a simulated sub-step, the two wall passes 30 % (before their broad phase listed the
+walls near the sand: -12 % of the kernels' time), the tool's per-sphere test 10 %, the Verlet
+lists 5-20 % (20 % while the blade stirs the sand). With the fresh policy of
+``benchmarks/learning_throughput.py`` the blade never reaches the sand, yet 86 % of the kernels'
+time falls in each episode's first 100 steps: the cached heap, settled in a 0.36 m pen, slumps in
+the 0.4 m deposit until about step 100-150, after which island sleeping skips it.
 
 Kernels are compiled on first use and cached on disk (``cache=True``), so only the first import on
 a machine pays the compile time. They keep IEEE arithmetic (no ``fastmath``): with it, the kernels
@@ -28,6 +39,10 @@ SLEEP_SPEED, MAX_SPEED, PAIR_MARGIN, GRAVITY = 11, 12, 13, 14
 N_COEFFICIENTS = 15
 
 _jit = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+#: Instances stepped on several threads (numba's ``prange``): they share nothing. Not cached: numba
+#: keys its disk cache by function and signature, not by ``parallel``, so a cached threaded build
+#: of :func:`_advance` would replace the single-threaded one (and be loaded for it).
+_parallel = nb.njit(cache=False, nogil=True, fastmath=False, error_model="numpy", parallel=True)
 #: Small helpers called per sphere and per shape are inlined by numba: a call that passes arrays
 #: costs reference counting, several times the work of the helper itself (3x the whole step).
 _inline = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy", inline="always")
@@ -158,16 +173,15 @@ def _boxes_correction(start, end, centers, rotations, halves, bounds, radius, mu
     return touching
 
 
-@_jit
-def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+@_inline
+def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients, total, inv_mass):  # type: ignore[no-untyped-def]
     """One averaged Jacobi pass over instance b's candidate sphere pairs, with mass scaling and
-    friction; updates ``predicted[b]`` in place."""
+    friction; updates ``predicted[b]`` in place. ``total`` (N, 4), ``inv_mass`` (N,): work space."""
     now, before, listed = predicted[b], previous[b], pairs[b]
     n = now.shape[0]
     r2 = 2.0 * coefficients[RADIUS]
     mu_s, mu_k, k_mass = coefficients[MU_SPHERE_S], coefficients[MU_SPHERE_K], coefficients[MASS_SCALING]
-    total = np.zeros((n, 4))  # summed corrections (x, y, z) and number of contacts
-    inv_mass = np.empty(n)
+    total[:] = 0.0  # summed corrections (x, y, z) and number of contacts
     for i in range(n):
         inv_mass[i] = math.exp(k_mass * now[i, 2])
     for p in range(n_pairs[b]):
@@ -207,12 +221,31 @@ def _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients):  # type: i
 
 
 @_jit
-def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients):  # type: ignore[no-untyped-def]
+def _project(
+    b,
+    previous,
+    predicted,
+    pairs,
+    n_pairs,
+    has_tool,
+    p0,
+    r0,
+    p1,
+    r1,
+    tool,
+    walls,
+    coefficients,
+    pair_work,
+    scratch,
+    listed,
+):  # type: ignore[no-untyped-def]
     """One pass over all contacts of instance b (Gauss-Seidel between groups): sphere pairs, the
     ground and the walls with friction, the tool (its pose p0, r0 at the sub-step's start, p1, r1
     at its end), then the walls and the ground again without friction, so that static surfaces
     win. ``tool``: the tool's shape arrays (see :func:`advance`); ``walls``: the walls' centers,
-    rotations, half extents and bounds. Updates ``predicted[b]`` in place."""
+    rotations, half extents and bounds; ``pair_work`` (N, 5), ``scratch`` (31,) and ``listed`` (K,)
+    int64: work space.
+    Updates ``predicted[b]`` in place."""
     (
         box_centers,
         box_rotations,
@@ -227,8 +260,14 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, t
     n = predicted.shape[1]
     radius = coefficients[RADIUS]
     if n_pairs[b]:
-        _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients)
-    start, end, moved, scratch = np.empty(3), np.empty(3), np.empty(3), np.empty(18)
+        _pair_pass(b, previous, predicted, pairs, n_pairs, coefficients, pair_work[:, 0:4], pair_work[:, 4])
+    start, end, moved, before, scratch = scratch[0:3], scratch[3:6], scratch[6:9], scratch[9:13], scratch[13:31]
+    before[0], before[1], before[2], before[3] = np.inf, -np.inf, np.inf, -np.inf  # x, y extent of previous[b]
+    for i in range(n):
+        before[0] = min(before[0], previous[b, i, 0])
+        before[1] = max(before[1], previous[b, i, 0])
+        before[2] = min(before[2], previous[b, i, 1])
+        before[3] = max(before[3], previous[b, i, 1])
     # Static surfaces with friction before the tool (so friction never drags a sphere into it) ...
     mu_s, mu_k = coefficients[MU_GROUND_S], coefficients[MU_GROUND_K]
     for i in range(n):
@@ -260,6 +299,8 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, t
         end,
         moved,
         scratch,
+        listed,
+        before,
     )
     if has_tool:
         mu_s, mu_k = coefficients[MU_TOOL_S], coefficients[MU_TOOL_K]
@@ -316,19 +357,53 @@ def _project(b, previous, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, t
                 predicted[b, i, c] += r1[b, c, 0] * moved[0] + r1[b, c, 1] * moved[1] + r1[b, c, 2] * moved[2]
 
     # ... and their normal constraints after it: the walls, then the ground's hard limit, win.
-    _walls_pass(b, previous, predicted, walls, radius, 0.0, 0.0, start, end, moved, scratch)
+    _walls_pass(b, previous, predicted, walls, radius, 0.0, 0.0, start, end, moved, scratch, listed, before)
     for i in range(n):
         predicted[b, i, 2] = max(predicted[b, i, 2], radius)
 
 
 @_inline
-def _walls_pass(b, previous, predicted, walls, radius, mu_s, mu_k, start, end, moved, scratch):  # type: ignore[no-untyped-def]
+def _walls_pass(b, previous, predicted, walls, radius, mu_s, mu_k, start, end, moved, scratch, listed, before):  # type: ignore[no-untyped-def]
     """Contacts of instance b's spheres with its walls (``walls``: per-instance arrays (B, K, ...);
-    friction mu_s, mu_k), in place."""
+    friction mu_s, mu_k), in place. ``listed`` (K,) int64: work space; ``before`` (4,): the x, y
+    extent (x0, x1, y0, y1, m) of ``previous[b]``.
+
+    Broad phase: the walls whose grown bounds meet the x, y extent of all the spheres' segments
+    (``previous`` to ``predicted``) are listed, and only a sphere whose segment meets the bounds
+    of a listed wall is solved (against every wall, as :func:`_boxes_correction` does): for the
+    other walls and spheres its own bounds test fails, so the result is the same."""
     wall_centers, wall_rotations, wall_halves, wall_bounds = walls[0][b], walls[1][b], walls[2][b], walls[3][b]
     if wall_centers.shape[0] == 0:
         return
-    for i in range(predicted.shape[1]):
+    n = predicted.shape[1]
+    x0, x1, y0, y1 = before[0], before[1], before[2], before[3]
+    for i in range(n):
+        x0 = min(x0, predicted[b, i, 0])
+        x1 = max(x1, predicted[b, i, 0])
+        y0 = min(y0, predicted[b, i, 1])
+        y1 = max(y1, predicted[b, i, 1])
+    n_listed = 0
+    for k in range(wall_centers.shape[0]):
+        bounds = wall_bounds[k]
+        if x0 < bounds[1, 0] and x1 > bounds[0, 0] and y0 < bounds[1, 1] and y1 > bounds[0, 1]:
+            listed[n_listed] = k
+            n_listed += 1
+    if n_listed == 0:
+        return
+    for i in range(n):
+        near = False
+        for m in range(n_listed):
+            k = listed[m]
+            near = True
+            for a in range(3):
+                s, e = previous[b, i, a], predicted[b, i, a]
+                if min(s, e) >= wall_bounds[k, 1, a] or max(s, e) <= wall_bounds[k, 0, a]:
+                    near = False
+                    break
+            if near:
+                break
+        if not near:
+            continue
         for a in range(3):
             start[a], end[a] = previous[b, i, a], predicted[b, i, a]
         if _boxes_correction(
@@ -369,45 +444,62 @@ def _rebuild_pairs(b, positions, built_at, pairs, n_pairs, reach):  # type: igno
     return True
 
 
-@_jit
-def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
-    """Rebuild the Verlet list of every instance one of whose spheres moved half the margin since
-    its last build (so no unlisted pair can touch). Returns False if ``pairs`` is too small."""
+@_inline
+def _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+    """Rebuild instance b's Verlet list if one of its spheres moved half the margin since its
+    last build (so no unlisted pair can touch). Returns False (the list marked -1: rebuild) if
+    ``pairs`` is too small."""
     margin = coefficients[PAIR_MARGIN]
-    reach = 2.0 * coefficients[RADIUS] + margin
     limit = (0.5 * margin) ** 2
-    for b in range(positions.shape[0]):
-        stale = n_pairs[b] < 0
-        for i in range(positions.shape[1]):
-            if stale:
-                break
-            dx = positions[b, i, 0] - built_at[b, i, 0]
-            dy = positions[b, i, 1] - built_at[b, i, 1]
-            dz = positions[b, i, 2] - built_at[b, i, 2]
-            stale = dx * dx + dy * dy + dz * dz >= limit
-        if stale and not _rebuild_pairs(b, positions, built_at, pairs, n_pairs, reach):
-            n_pairs[b] = -1
-            return False
+    stale = n_pairs[b] < 0
+    for i in range(positions.shape[1]):
+        if stale:
+            break
+        dx = positions[b, i, 0] - built_at[b, i, 0]
+        dy = positions[b, i, 1] - built_at[b, i, 1]
+        dz = positions[b, i, 2] - built_at[b, i, 2]
+        stale = dx * dx + dy * dy + dz * dz >= limit
+    if stale and not _rebuild_pairs(b, positions, built_at, pairs, n_pairs, 2.0 * coefficients[RADIUS] + margin):
+        n_pairs[b] = -1
+        return False
     return True
 
 
 @_jit
-def _tool_far(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
-    """Whether the tool is surely too far from every sphere of instance b (at rest) for
-    :func:`_in_tool_frame` to find one not clear of its grown bounds during the sub-step: a bound
-    on the whole sand (its axis-aligned box), so that most sub-steps need no test per sphere.
+def update_pairs(positions, built_at, pairs, n_pairs, coefficients):  # type: ignore[no-untyped-def]
+    """:func:`_fresh_pairs` for every instance, in order (stopping at the first whose ``pairs``
+    proved too small). Returns False if ``pairs`` is too small."""
+    for b in range(positions.shape[0]):  # noqa: SIM110 (numba: no generator into all())
+        if not _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):
+            return False
+    return True
+
+
+@_inline
+def _sand_bounds(b, positions, bounds):  # type: ignore[no-untyped-def]
+    """Instance b's spheres' axis-aligned bounds into ``bounds`` (2, 3): lower, upper (m)."""
+    for a in range(3):
+        bounds[0, a] = np.inf
+        bounds[1, a] = -np.inf
+    for i in range(positions.shape[1]):
+        for a in range(3):
+            bounds[0, a] = min(bounds[0, a], positions[b, i, a])
+            bounds[1, a] = max(bounds[1, a], positions[b, i, a])
+
+
+@_inline
+def _tool_far(b, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
+    """Whether the tool is surely too far from every sphere of instance b (at rest, within the
+    bounds ``sand`` (2, 3) of :func:`_sand_bounds`) for :func:`_in_tool_frame` to find one not
+    clear of its grown bounds during the sub-step: a bound on the whole sand, so that most
+    sub-steps need no test per sphere.
 
     A resting sphere x has tool-frame end points at distances |x - c0|, |x - c1| from the bounds'
     centre c (world c0 at the start, c1 at the end), at most L = |p1 - p0| + |r1 - r0| |x - p0|
     apart (|r1 - r0| = sqrt(3 - trace(r0^T r1)) for rotations); the segment between them is clear
     along some axis if it stays beyond R + L of c, R the bounds' half diagonal (tested with
     margin: the nearest end point beyond R + 2 L, from the bound on the sand)."""
-    low = np.full(3, np.inf)
-    high = np.full(3, -np.inf)
-    for i in range(positions.shape[1]):
-        for a in range(3):
-            low[a] = min(low[a], positions[b, i, a])
-            high[a] = max(high[a], positions[b, i, a])
+    low, high = sand[0], sand[1]
     trace = 0.0
     for a in range(3):
         for c in range(3):
@@ -432,11 +524,12 @@ def _tool_far(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignor
     return min(math.sqrt(near0), math.sqrt(near1)) - apart > half_diagonal + 2.0 * apart + 1e-9
 
 
-@_jit
-def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
+@_inline
+def _tool_reaches(b, positions, sand, p0, r0, p1, r1, tool_low, tool_high):  # type: ignore[no-untyped-def]
     """Whether a sphere of instance b meets the tool's grown bounds during the sub-step (the same
-    answer as testing every sphere; :func:`_tool_far` spares the test in most sub-steps)."""
-    if _tool_far(b, positions, p0, r0, p1, r1, tool_low, tool_high):
+    answer as testing every sphere; :func:`_tool_far` on the sand's bounds ``sand`` (2, 3)
+    spares the test in most sub-steps)."""
+    if _tool_far(b, sand, p0, r0, p1, r1, tool_low, tool_high):
         return False
     start, end = np.empty(3), np.empty(3)
     for i in range(positions.shape[1]):
@@ -445,16 +538,18 @@ def _tool_reaches(b, positions, p0, r0, p1, r1, tool_low, tool_high):  # type: i
     return False
 
 
-@_jit
-def advance(
+@_inline
+def _advance_instance(
+    b,
     positions,
     carried,
     velocities,
+    predicted,
     built_at,
     pairs,
     n_pairs,
     resting,
-    first_substep,
+    progress,
     h,
     has_tool,
     path_positions,
@@ -464,57 +559,128 @@ def advance(
     coefficients,
     freeze_after,
 ):  # type: ignore[no-untyped-def]
-    """Sub-steps ``first_substep`` .. S-1 of length h (s) for all instances, the tool moving along
-    ``path_positions`` (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3). Updates the state arrays in
-    place. Returns -1 when done, or the sub-step at which ``pairs`` proved too small (nothing of
-    that sub-step was simulated yet: grow ``pairs`` and call again from there).
+    """Sub-steps ``progress[b]`` .. S-1 of instance b (see :func:`advance`)."""
+    n = positions.shape[1]
+    sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2
+    max_speed, gravity = coefficients[MAX_SPEED], coefficients[GRAVITY]
+    pair_work, scratch, sand = np.empty((n, 5)), np.empty(31), np.empty((2, 3))
+    listed = np.empty(walls[0].shape[1], dtype=np.int64)
+    sand_known = False  # whether ``sand`` holds the bounds of the spheres' current positions
+    n_substeps = path_positions.shape[0] - 1
+    for s in range(progress[b], n_substeps):
+        if not _fresh_pairs(b, positions, built_at, pairs, n_pairs, coefficients):
+            progress[b] = s
+            return
+        p0, r0, p1, r1 = path_positions[s], path_rotations[s], path_positions[s + 1], path_rotations[s + 1]
+        if freeze_after > 0 and resting[b] >= freeze_after:
+            if has_tool and not sand_known:
+                _sand_bounds(b, positions, sand)
+                sand_known = True
+            if not has_tool or not _tool_reaches(b, positions, sand, p0, r0, p1, r1, tool[7], tool[8]):
+                continue  # island sleeping: this instance is at rest and untouched
+        sand_known = False
+        for i in range(n):
+            carried[b, i, 2] -= gravity * h
+            for a in range(3):
+                predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
+        _project(
+            b,
+            positions,
+            predicted,
+            pairs,
+            n_pairs,
+            has_tool,
+            p0,
+            r0,
+            p1,
+            r1,
+            tool,
+            walls,
+            coefficients,
+            pair_work,
+            scratch,
+            listed,
+        )
+        awake_any = False
+        for i in range(n):
+            dx = predicted[b, i, 0] - positions[b, i, 0]
+            dy = predicted[b, i, 1] - positions[b, i, 1]
+            dz = predicted[b, i, 2] - positions[b, i, 2]
+            speed2 = dx * dx + dy * dy + dz * dz
+            awake = speed2 >= sleep2
+            scale = 1.0 / h
+            if max_speed > 0.0 and speed2 > (max_speed * h) ** 2:
+                scale = max_speed / math.sqrt(speed2)
+            carried[b, i, 0], carried[b, i, 1], carried[b, i, 2] = dx * scale, dy * scale, dz * scale
+            if awake:
+                awake_any = True
+                for a in range(3):
+                    positions[b, i, a] = predicted[b, i, a]
+                    velocities[b, i, a] = carried[b, i, a]
+            else:
+                for a in range(3):
+                    velocities[b, i, a] = 0.0
+        resting[b] = 0 if awake_any else resting[b] + 1
+    progress[b] = n_substeps
+
+
+def _advance(
+    positions,
+    carried,
+    velocities,
+    built_at,
+    pairs,
+    n_pairs,
+    resting,
+    progress,
+    h,
+    has_tool,
+    path_positions,
+    path_rotations,
+    tool,
+    walls,
+    coefficients,
+    freeze_after,
+):  # type: ignore[no-untyped-def]
+    """Sub-steps of length h (s) for all instances, the tool moving along ``path_positions``
+    (S+1, B, 3), ``path_rotations`` (S+1, B, 3, 3): instance b from sub-step ``progress[b]`` on
+    (B,), to S, or to the sub-step at which its ``pairs`` proved too small (nothing of that
+    sub-step simulated yet: grow ``pairs`` and call again). Updates the state arrays and
+    ``progress`` in place. Instances are independent: each one's sub-steps run one after the
+    other, in the order of the scheme.
 
     ``tool`` is the tuple (box centers, rotations, half extents, bounds, capsule starts, ends,
     radii, low, high) of the tool's shapes in its frame with its bounds grown by the sphere radius,
     ``walls`` the tuple (centers, rotations, half extents, bounds) of each instance's static boxes
     (B, K, ...), world frame.
     """
-    n_batch, n = positions.shape[0], positions.shape[1]
-    sleep2 = (coefficients[SLEEP_SPEED] * h) ** 2
-    max_speed, gravity = coefficients[MAX_SPEED], coefficients[GRAVITY]
     predicted = np.empty_like(positions)
-    for s in range(first_substep, path_positions.shape[0] - 1):
-        if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
-            return s
-        p0, r0, p1, r1 = path_positions[s], path_rotations[s], path_positions[s + 1], path_rotations[s + 1]
-        for b in range(n_batch):
-            if (
-                freeze_after > 0
-                and resting[b] >= freeze_after
-                and (not has_tool or not _tool_reaches(b, positions, p0, r0, p1, r1, tool[7], tool[8]))
-            ):
-                continue  # island sleeping: this instance is at rest and untouched
-            for i in range(n):
-                carried[b, i, 2] -= gravity * h
-                for a in range(3):
-                    predicted[b, i, a] = positions[b, i, a] + h * carried[b, i, a]
-            _project(b, positions, predicted, pairs, n_pairs, has_tool, p0, r0, p1, r1, tool, walls, coefficients)
-            awake_any = False
-            for i in range(n):
-                dx = predicted[b, i, 0] - positions[b, i, 0]
-                dy = predicted[b, i, 1] - positions[b, i, 1]
-                dz = predicted[b, i, 2] - positions[b, i, 2]
-                speed2 = dx * dx + dy * dy + dz * dz
-                awake = speed2 >= sleep2
-                scale = 1.0 / h
-                if max_speed > 0.0 and speed2 > (max_speed * h) ** 2:
-                    scale = max_speed / math.sqrt(speed2)
-                carried[b, i, 0], carried[b, i, 1], carried[b, i, 2] = dx * scale, dy * scale, dz * scale
-                if awake:
-                    awake_any = True
-                    for a in range(3):
-                        positions[b, i, a] = predicted[b, i, a]
-                        velocities[b, i, a] = carried[b, i, a]
-                else:
-                    for a in range(3):
-                        velocities[b, i, a] = 0.0
-            resting[b] = 0 if awake_any else resting[b] + 1
-    return -1
+    for b in nb.prange(positions.shape[0]):
+        _advance_instance(
+            b,
+            positions,
+            carried,
+            velocities,
+            predicted,
+            built_at,
+            pairs,
+            n_pairs,
+            resting,
+            progress,
+            h,
+            has_tool,
+            path_positions,
+            path_rotations,
+            tool,
+            walls,
+            coefficients,
+            freeze_after,
+        )
+
+
+#: :func:`_advance` on the calling thread, and on numba's threads (instances shared out among them).
+advance = _jit(_advance)
+advance_on_threads = _parallel(_advance)
 
 
 @_jit
@@ -535,6 +701,8 @@ def place(
     the tool still at its pose (B, 3), (B, 3, 3); ``tool`` and ``walls`` as in :func:`advance`.
     Returns False if ``pairs`` proved too small (grow it and call again)."""
     predicted = positions.copy()
+    pair_work, scratch = np.empty((positions.shape[1], 5)), np.empty(31)
+    listed = np.empty(walls[0].shape[1], dtype=np.int64)
     for _ in range(iterations):
         if not update_pairs(positions, built_at, pairs, n_pairs, coefficients):
             return False
@@ -555,6 +723,25 @@ def place(
                 tool,
                 walls,
                 coefficients,
+                pair_work,
+                scratch,
+                listed,
             )
         positions[...] = predicted
     return True
+
+
+@_jit
+def in_box_counts(positions, floor_centers, half_side, height):  # type: ignore[no-untyped-def]
+    """(B,) float: per instance, the sphere centres (B, N, 3) within ``half_side`` (m) of the box's
+    floor centre (B, 3) in x and y and between 0 and ``height`` (m) above it (the spade's goal
+    region; the same comparisons as the array expression, without its temporaries)."""
+    counts = np.zeros(positions.shape[0])
+    for b in range(positions.shape[0]):
+        for i in range(positions.shape[1]):
+            dx = positions[b, i, 0] - floor_centers[b, 0]
+            dy = positions[b, i, 1] - floor_centers[b, 1]
+            dz = positions[b, i, 2] - floor_centers[b, 2]
+            if abs(dx) < half_side and abs(dy) < half_side and dz >= 0.0 and dz <= height:
+                counts[b] += 1.0
+    return counts

@@ -76,8 +76,10 @@ the instance (batch).
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from toolimit.scenes.spatial import particle_kernels as kernels
@@ -178,6 +180,13 @@ def _box_bounds(centers: np.ndarray, rotations: np.ndarray, half_extents: np.nda
     return np.stack([centers - reach, centers + reach], axis=-2)
 
 
+def checked_threads(threads: int) -> int:
+    """``threads`` if it is an integer in 1..numba's ``NUMBA_NUM_THREADS``; else ValueError."""
+    if not isinstance(threads, numbers.Integral) or not 1 <= threads <= numba.config.NUMBA_NUM_THREADS:
+        raise ValueError(f"threads must be an integer in 1..{numba.config.NUMBA_NUM_THREADS}, got {threads!r}")
+    return int(threads)
+
+
 #: Initial capacity of each instance's Verlet list, in pairs per sphere (grown when exceeded).
 _PAIRS_PER_SPHERE = 16
 
@@ -190,12 +199,22 @@ class ParticleWorld:
         static_boxes: walls (world frame), shared or per instance (then B must match the
             ``reset`` positions'), or None.
         tool: the tool's shapes (tool frame) or None for no tool.
+        threads: threads sharing out the instances at each step (numba's, at most its
+            ``NUMBA_NUM_THREADS``, the cores by default); the same numbers whatever their count:
+            instances share nothing.
 
     State (public, world frame): ``positions`` (B, N, 3) m, ``velocities`` (B, N, 3) m/s; the tool
     pose ``tool_position`` (B, 3), ``tool_rotation`` (B, 3, 3) or None before it is placed.
     """
 
-    def __init__(self, material: GranularMaterial, static_boxes: StaticBoxes | None, tool: ToolShapes | None):
+    def __init__(
+        self,
+        material: GranularMaterial,
+        static_boxes: StaticBoxes | None,
+        tool: ToolShapes | None,
+        threads: int = 1,
+    ):
+        self.threads = checked_threads(threads)
         self.material = material
         self.static_boxes = static_boxes
         self.tool = tool
@@ -382,9 +401,14 @@ class ParticleWorld:
             path_rotations = np.broadcast_to(np.eye(3), (substeps + 1, b, 3, 3))
         path_positions = np.ascontiguousarray(path_positions, dtype=float)
         path_rotations = np.ascontiguousarray(path_rotations, dtype=float)
-        first = 0
+        progress = np.zeros(b, dtype=np.int64)  # (B,) each instance's next sub-step
+        kernel = kernels.advance
+        if self.threads > 1:
+            kernel = kernels.advance_on_threads
+            numba.set_num_threads(self.threads)
+            numba.set_parallel_chunksize(1)  # instances one at a time: their costs differ
         while True:
-            first = kernels.advance(
+            kernel(
                 self.positions,
                 self._carried,
                 self.velocities,
@@ -392,7 +416,7 @@ class ParticleWorld:
                 self._pairs,
                 self._n_pairs,
                 self._resting,
-                first,
+                progress,
                 h,
                 has_tool,
                 path_positions,
@@ -402,6 +426,6 @@ class ParticleWorld:
                 self._coefficients,
                 self._freeze_after,
             )
-            if first < 0:
+            if np.all(progress == substeps):
                 return
             self._grow_pairs()
