@@ -6,7 +6,7 @@ Every function works on one instance ``b`` of the batched arrays at a time, in t
 metres and seconds, except where a name says *local* (a box's or the tool's frame). Instances share
 nothing, so :func:`advance` runs each one's sub-steps one after the other (its spheres stay in the
 cache) and :func:`advance_on_threads` shares the instances out among numba's threads: the same
-numbers, bit for bit, whatever their count (``tests/scenes/test_sand_golden_rollout.py``).
+numbers, bit for bit, whatever their count (``tests/scenes/test_sand_threads.py``).
 
 Where the time goes (Panda spade task, B = 16, 200 spheres, one core): the sphere pairs' Jacobi pass
 about 40 % of a simulated sub-step, the two wall passes 30 % (before their broad phase listed the
