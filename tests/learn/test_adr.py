@@ -15,7 +15,6 @@ from gymnasium.utils.env_checker import check_env
 from toolimit.errors import InputError
 from toolimit.learn import BatchedTaskVecEnv, TaskSimulator, ToolUseEnv, shipped_task
 from toolimit.learn import adr as adr_module
-from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.adr import (
     DECISION_EPISODES,
     DELTA,
@@ -25,6 +24,7 @@ from toolimit.learn.adr import (
     BoundaryBatch,
     boundary_test,
 )
+from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.heat_map import HeatMap, goal_box_heat_map
 from toolimit.learn.ppo import CHECKPOINT_STATE
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
@@ -288,8 +288,8 @@ def test_the_simulator_says_which_boxes_fell_back_and_the_callback_never_tests_t
 
 def test_a_checkpoint_of_an_earlier_adr_rule_is_refused_in_one_line(spade_task, tmp_path):
     out = tmp_path / "run"
-    learn_policy(spade_task, out, LearningConfig(**{**TINY.__dict__, "timesteps": spade_task.horizon * 2}),
-                 progress=False)
+    first = LearningConfig(**{**TINY.__dict__, "timesteps": spade_task.horizon * 2})
+    learn_policy(spade_task, out, first, progress=False)
     state_path = out / CHECKPOINT_STATE
     state = json.loads(state_path.read_text())
     del state["adr"]["rule_version"], state["adr"]["buffers"]  # as the return rule wrote it
