@@ -43,6 +43,20 @@ def test_learn_with_adr_then_a_heat_map(tmp_path, capsys):
     assert "--heat-map: expected a .svg file name" in _error_line(capsys)
 
 
+def test_resuming_a_checkpoint_of_an_earlier_adr_rule_is_one_line_exit_2(tmp_path, capsys):
+    out = tmp_path / "learned"
+    assert main(["learn", "--env", "toolimit/SpadePlanar-v0", "--adr", "--out", str(out), *TINY]) == 0
+    state_path = out / "checkpoint.json"
+    state = json.loads(state_path.read_text())
+    del state["adr"]["rule_version"], state["adr"]["buffers"]  # as the return rule wrote it
+    state_path.write_text(json.dumps(state))
+    capsys.readouterr()
+    more = [*TINY[:1], "100", *TINY[2:]]
+    assert main(["learn", "--env", "toolimit/SpadePlanar-v0", "--adr", "--out", str(out), *more]) == 2
+    line = _error_line(capsys)
+    assert str(state_path) in line and "written by an earlier ADR rule" in line and "new output folder" in line
+
+
 @pytest.mark.parametrize(("argv", "message"), [
     (["learn", "--env", "toolimit/Shovel3D-v0"], "--env: unknown id 'toolimit/Shovel3D-v0'"),
     (["learn", "--task", "absent.npz"], "absent.npz: no such task file"),

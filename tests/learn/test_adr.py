@@ -24,7 +24,9 @@ from toolimit.learn.adr import (
     BoundaryBatch,
     boundary_test,
 )
+from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.heat_map import HeatMap, goal_box_heat_map
+from toolimit.learn.ppo import CHECKPOINT_STATE
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
 from toolimit.viz.svg_heat_map import heat_map_svg
 
@@ -89,7 +91,11 @@ def _state(axes=(0, 1), seed: int = 0) -> AdrState:
 
 def _batch(successes: int, episodes: int = DECISION_EPISODES):
     """A fake boundary test: ``successes`` of ``episodes`` succeed (the first ones)."""
-    return lambda _: BoundaryBatch(np.arange(episodes) < successes, goal_reward_mean=float(successes))
+    return lambda _: BoundaryBatch(np.arange(episodes) < successes, _placed(episodes), float(successes))
+
+
+def _placed(episodes: int) -> np.ndarray:
+    return np.ones(episodes, dtype=bool)
 
 
 def _side(record) -> tuple[int, int]:
@@ -106,7 +112,7 @@ def test_a_bound_is_decided_only_once_its_buffer_holds_the_decision_episodes():
 
     def all_succeed(bounds: AdrBounds) -> BoundaryBatch:
         pinned_at.append((bounds.low.copy(), bounds.high.copy()))
-        return BoundaryBatch(np.ones(quarter, dtype=bool), 20.0)
+        return BoundaryBatch(np.ones(quarter, dtype=bool), _placed(quarter), 20.0)
 
     for _ in range(40):
         record = boundary_test(state, all_succeed)
@@ -165,7 +171,7 @@ def test_a_buffer_mixes_its_batches_and_survives_a_checkpoint():
             boundary_test(resumed, fake)
         saved = json.loads(json.dumps(resumed.state_dict()))
         restored = _state(axes=(0,), seed=99)
-        restored.load_state_dict(saved)
+        restored.load_state_dict(saved, "checkpoint.json")
         for fake in stream[stop:]:
             boundary_test(restored, fake)
         assert restored.tests == state.tests
@@ -181,7 +187,7 @@ def test_same_seed_same_decisions_on_a_random_success_stream():
         state, stream = _state(seed=seed), np.random.default_rng(7)
 
         def noisy(_: AdrBounds) -> BoundaryBatch:
-            return BoundaryBatch(stream.random(16) < 0.85, 0.0)
+            return BoundaryBatch(stream.random(16) < 0.85, _placed(16), 0.0)
 
         for _ in range(60):
             boundary_test(state, noisy)
@@ -193,11 +199,106 @@ def test_same_seed_same_decisions_on_a_random_success_stream():
 
 def test_a_bound_is_not_pushed_where_the_box_cannot_stand_and_planar_moves_x_only():
     state = _state(axes=(0, 2))
-    record = boundary_test(state, _batch(DECISION_EPISODES), placeable=lambda _: False)
+    only_at_the_aligned_box = lambda bounds: np.array_equal(bounds.low, bounds.aligned)  # noqa: E731
+    record = boundary_test(state, _batch(DECISION_EPISODES), placeable=only_at_the_aligned_box)
     assert record["axis"] == "x" and record["after"] == record["bound"] and record["decision"] == "hold"
     for _ in range(50):
         boundary_test(state, _batch(DECISION_EPISODES))
     assert state.bounds.low[1] == state.bounds.high[1] == -0.1
+
+
+def test_an_unplaceable_bound_is_re_picked_from_the_same_generator_or_the_test_skipped():
+    """x low refused (as the near x bound whose whole y range stands on the deposit): its tests go
+    to another bound, never run there, its buffer stays empty; the same seed re-picks alike; with
+    every bound refused the test is skipped without episodes. The record counts both."""
+
+    def run(seed: int) -> AdrState:
+        state = _state(seed=seed)
+        state.bounds.low[0] -= 0.2  # x low apart from the aligned value, so the pin identifies it
+        ran_at = []
+
+        def at_x_low(bounds: AdrBounds) -> bool:
+            return bool(bounds.low[0] == bounds.high[0] == state.bounds.bound(0, 0))
+
+        def batch(bounds: AdrBounds) -> BoundaryBatch:
+            ran_at.append(at_x_low(bounds))
+            return _batch(8, 16)(bounds)
+
+        for _ in range(40):
+            boundary_test(state, batch, lambda bounds: not at_x_low(bounds))
+        assert not any(ran_at), "no batch ran with x pinned at its low bound"
+        return state
+
+    state = run(0)
+    repicked = [t for t in state.tests if t["refused"]]
+    assert repicked and all(t["refused"] == ["x low"] and t["skipped"] is None for t in repicked)
+    assert all((t["axis"], t["side"]) != ("x", "low") for t in state.tests)
+    assert state.buffers[0][0] == [] and state.bounds.bound(0, 0) == pytest.approx(0.0)
+    assert len(repicked) < len(state.tests), "a first pick elsewhere is not re-picked"
+    record = state.record(every=8)
+    assert record["repicked"] == len(repicked) and record["skipped"] == 0
+    assert run(0).tests == state.tests and run(1).tests != state.tests
+
+    skipped = _state()
+    record = boundary_test(skipped, lambda _: pytest.fail("no episodes for a skipped test"), lambda _: False)
+    assert record["skipped"] and record["episodes"] == 0 and record["decision"] is None
+    assert sorted(record["refused"]) == ["x high", "x low", "y high", "y low"]
+    assert skipped.record(every=8)["skipped"] == 1 and skipped.record(every=8)["repicked"] == 0
+    np.testing.assert_array_equal(skipped.bounds.low, skipped.bounds.aligned)
+
+
+def test_episodes_not_placed_at_the_bound_never_join_its_buffer():
+    """Half of each batch fell back to the aligned box (and succeeded there): only the placed half,
+    all failures, counts, so the bound is pulled at 0.0 rather than held at 0.5."""
+    state = _state(axes=(0,))
+    state.bounds.low[0] -= 0.2
+    state.bounds.high[0] += 0.2
+    half = DECISION_EPISODES // 2
+    fell_back = np.arange(2 * half) < half
+
+    def batch(_: AdrBounds) -> BoundaryBatch:
+        return BoundaryBatch(successes=fell_back, placed=~fell_back, goal_reward_mean=0.0)
+
+    records = [boundary_test(state, batch) for _ in range(4)]
+    assert all(r["episodes"] == 2 * half and r["placed"] == half and r["successes"] == 0 for r in records)
+    decided = [r for r in records if r["decision"] is not None]
+    assert decided and all(r["decision"] == "pull" and r["success_rate"] == 0.0 for r in decided)
+    assert state.record(every=8)["unplaced_episodes"] == 4 * half
+
+
+def test_the_simulator_says_which_boxes_fell_back_and_the_callback_never_tests_there(spade_task, cloned_adr_policy):
+    """Planar spade: the deposit lies beyond the aligned box in x. A high x bound on the deposit is
+    refused by the callback's placeability check, so its tests run at x low; a batch pinned there
+    anyway reports every box as not placed (they stand at the aligned one)."""
+    env = BatchedTaskVecEnv(spade_task, 2, seed=0, adr=True)
+    aligned = env.adr.bounds.aligned[0]
+    env.adr.bounds.low[0], env.adr.bounds.high[0] = aligned - 0.2, aligned + 0.1  # 0.02 m on is on the deposit
+    callback = AdrCallback(env)
+    callback.init_callback(cloned_adr_policy)
+    on_deposit = callback._episodes_at(env.adr.bounds.pinned(0, 1))
+    assert not on_deposit.placed.any()
+    np.testing.assert_allclose(callback.simulator.box_positions[:, 0], aligned)
+    assert callback._episodes_at(env.adr.bounds.pinned(0, 0)).placed.all()
+    records = [boundary_test(env.adr, callback._episodes_at, callback._placeable) for _ in range(8)]
+    assert all(r["side"] == "low" and r["placed"] == r["episodes"] == 2 for r in records)
+    assert any(r["refused"] == ["x high"] for r in records), "seed 0 first picks x high at least once in 8"
+    assert env.adr.buffers[0][1] == []
+    env.close()
+
+
+def test_a_checkpoint_of_an_earlier_adr_rule_is_refused_in_one_line(spade_task, tmp_path):
+    out = tmp_path / "run"
+    first = LearningConfig(**{**TINY.__dict__, "timesteps": spade_task.horizon * 2})
+    learn_policy(spade_task, out, first, progress=False)
+    state_path = out / CHECKPOINT_STATE
+    state = json.loads(state_path.read_text())
+    del state["adr"]["rule_version"], state["adr"]["buffers"]  # as the return rule wrote it
+    state_path.write_text(json.dumps(state))
+    more = LearningConfig(**{**TINY.__dict__, "timesteps": spade_task.horizon * 4})
+    with pytest.raises(InputError, match="written by an earlier ADR rule") as error:
+        learn_policy(spade_task, out, more, progress=False)
+    assert str(state_path) in str(error.value) and "new output folder" in str(error.value)
+    assert "\n" not in str(error.value)
 
 
 def test_learning_logs_and_resumes_the_adr_state_exactly(spade_task, tmp_path, monkeypatch):

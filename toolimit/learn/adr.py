@@ -10,7 +10,8 @@ the aligned position (the task's) and move by boundary tests, run during PPO by
   random (from the seeded generator of :class:`AdrState`, saved in checkpoints so that a resume is
   exact), and one extra batch of episodes runs with that coordinate pinned at that bound (the other
   uniform inside its bounds), the policy sampling its Gaussian as in training; each episode's
-  success (the scene's own test, the paper's) joins that bound's buffer;
+  success (the scene's own test, the paper's) joins that bound's buffer, if its box stood at the
+  bound (below);
 * once a bound's buffer holds :data:`DECISION_EPISODES` episodes (two batches of 16), their success
   rate decides: >= :data:`PUSH_SUCCESS` (0.8) moves the bound out by :data:`DELTA` (0.05 m),
   <= :data:`PULL_SUCCESS` (0.2) moves it in by DELTA (never past the aligned value), in between
@@ -37,6 +38,12 @@ Only the coordinates the scene uses are randomised (:attr:`AdrBounds.axes`): x a
 in the planar x-z world, whose box ignores y. A position that makes the scene invalid (the box on
 the deposit, outside the world) is redrawn (up to :data:`REDRAWS` times, then the aligned position
 is used), and a bound is not pushed to a value where no position is valid (:func:`boundary_test`).
+An episode whose box fell back to the aligned position was not played at the bound, so its success
+says nothing of it: it never joins a buffer. A bound where no box position inside the other bounds
+is valid (the near x bound whose whole y range stands on the deposit) is not tested: another bound
+is picked from the same generator, and if none is placeable the test is skipped; the learning
+record counts both (``repicked``, ``skipped``). Without this, such a bound's tests ran at the
+aligned box, succeeded, and filled its buffer with successes it had not earned.
 The default period :data:`EVERY` (8 updates) was chosen by measurement (README, "Domain
 randomisation"; ``benchmarks/adr_schedule.py``): on the Panda spade, seed 0, 1.5 M PPO steps,
 testing every 10 updates pushed at 14 of 16 decisions with 95 % success at the bounds (the tests,
@@ -75,6 +82,10 @@ EVERY = 8
 REDRAWS = 100
 #: Seed stream of the ADR generator, apart from the environments' (``[seed, ADR_STREAM]``).
 ADR_STREAM = 0xAD2
+#: The rule a checkpoint's ADR state was written under: checkpoints without it (the return rule,
+#: whose state had no buffers, and the success rule whose buffers took episodes at the aligned box)
+#: are refused rather than resumed under different decisions.
+RULE_VERSION = 2
 
 
 def goal_box_spec(scene: Scene) -> ParameterSpec:
@@ -132,19 +143,21 @@ class AdrBounds:
 
     def draw(
         self, rng: np.random.Generator, count: int, valid: Callable[[np.ndarray], bool] = lambda _: True
-    ) -> np.ndarray:
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(count, 2) positions uniform inside the bounds, each redrawn while ``valid`` says no (at
-        most REDRAWS times, then the aligned position), m. Draws the same numbers whatever ``valid``
-        says about other instances."""
+        most REDRAWS times, then the aligned position), m, and (count,) whether each was placed
+        inside the bounds (False: it fell back to the aligned position). Draws the same numbers
+        whatever ``valid`` says about other instances."""
         positions = np.empty((count, 2))
+        placed = np.ones(count, dtype=bool)
         for i in range(count):
             for _ in range(REDRAWS):
                 positions[i] = rng.uniform(self.low, self.high)
                 if valid(positions[i]):
                     break
             else:
-                positions[i] = self.aligned
-        return positions
+                positions[i], placed[i] = self.aligned, False
+        return positions, placed
 
     def placeable(self, rng: np.random.Generator, valid: Callable[[np.ndarray], bool]) -> bool:
         """Whether some draw inside these bounds is valid (REDRAWS tries)."""
@@ -175,6 +188,7 @@ class AdrState:
     def state_dict(self) -> dict[str, Any]:
         """JSON-ready state (for checkpoints)."""
         return {
+            "rule_version": RULE_VERSION,
             **self.bounds.record(),
             "rng": self.rng.bit_generator.state,
             "tested_at": self.tested_at,
@@ -182,8 +196,14 @@ class AdrState:
             "tests": self.tests,
         }
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore a :meth:`state_dict` (the bounds object is updated in place)."""
+    def load_state_dict(self, state: dict[str, Any], source: str) -> None:
+        """Restore a :meth:`state_dict` read from ``source`` (the bounds object is updated in
+        place); InputError naming ``source`` for a state of an earlier rule (:data:`RULE_VERSION`)."""
+        if state.get("rule_version") != RULE_VERSION:
+            raise InputError(
+                f"{source}: this checkpoint was written by an earlier ADR rule and cannot be resumed "
+                "under the current one; start a new output folder"
+            )
         self.bounds.low[:] = state["adr_low"]
         self.bounds.high[:] = state["adr_high"]
         self.rng.bit_generator.state = state["rng"]
@@ -204,16 +224,21 @@ class AdrState:
             "aligned": self.bounds.aligned.tolist(),
             **self.bounds.record(),
             "range_m": (self.bounds.high - self.bounds.low).tolist(),
+            "repicked": sum(bool(t["refused"]) and t["skipped"] is None for t in self.tests),
+            "skipped": sum(t["skipped"] is not None for t in self.tests),
+            "unplaced_episodes": sum(t["episodes"] - t["placed"] for t in self.tests),
             "tests": self.tests,
         }
 
 
 @dataclass(frozen=True)
 class BoundaryBatch:
-    """The episodes of one boundary test: each one's success (B,) and their mean goal reward at the
-    last step (spade: spheres in the box)."""
+    """The episodes of one boundary test: each one's success (B,), whether each one's box stood
+    inside the pinned bounds (B,) (False: no valid position was found, it stood at the aligned one),
+    and their mean goal reward at the last step (spade: spheres in the box)."""
 
     successes: np.ndarray
+    placed: np.ndarray
     goal_reward_mean: float
 
 
@@ -222,19 +247,33 @@ def boundary_test(
     episodes_at: Callable[[AdrBounds], BoundaryBatch],
     placeable: Callable[[AdrBounds], bool] = lambda _: True,
 ) -> dict[str, Any]:
-    """One boundary test (module docstring): pick a coordinate and a side with ``state.rng``, run
-    ``episodes_at`` the bounds pinned there, add their successes to that bound's buffer and, once it
-    holds DECISION_EPISODES, decide and empty it; a push happens only if ``placeable`` accepts the
-    bounds pinned at the new value. Appends and returns the test's record (axis, side, bound, the
-    batch's successes and goal reward, the decision and the buffer's success rate behind it, the
-    bound after)."""
+    """One boundary test (module docstring): pick a coordinate and a side with ``state.rng`` (again,
+    among the bounds not yet refused, while ``placeable`` refuses the bounds pinned there; skipped
+    if it refuses them all), run ``episodes_at`` the bounds pinned there, add the successes of the
+    episodes placed there to that bound's buffer and, once it holds DECISION_EPISODES, decide and
+    empty it; a push happens only if ``placeable`` accepts the bounds pinned at the new value.
+    Appends and returns the test's record: axis, side, bound (None if skipped), the bounds refused
+    before it (``refused``, e.g. "x low"), why it was skipped (``skipped``, None if run), the
+    episodes run, those placed at the bound and their successes, the batch's goal reward, the
+    decision and the buffer's success rate behind it, the bound after."""
     bounds = state.bounds
     axis = int(state.rng.choice(bounds.axes))
     side = int(state.rng.integers(2))
+    refused: list[tuple[int, int]] = []
+    while not placeable(bounds.pinned(axis, side)):
+        refused.append((axis, side))
+        remaining = [(a, s) for a in bounds.axes for s in (0, 1) if (a, s) not in refused]
+        if not remaining:
+            record = _test_record(refused, None, None, None, "no bound has a valid box position")
+            state.tests.append(record)
+            return record
+        axis, side = remaining[int(state.rng.integers(len(remaining)))]
     before = bounds.bound(axis, side)
     batch = episodes_at(bounds.pinned(axis, side))
+    placed = np.asarray(batch.placed, dtype=bool)
+    successes = np.asarray(batch.successes, dtype=bool)[placed]
     buffer = state.buffers[axis][side]
-    buffer.extend(bool(s) for s in np.asarray(batch.successes, dtype=bool))
+    buffer.extend(bool(s) for s in successes)
     after, decision, rate = before, None, None
     if len(buffer) >= DECISION_EPISODES:
         rate = float(np.mean(buffer))
@@ -248,12 +287,10 @@ def boundary_test(
             decision = "pull" if after != before else "hold"
         buffer.clear()
     (bounds.low, bounds.high)[side][axis] = after
-    record = {
-        "axis": "xy"[axis],
-        "side": ("low", "high")[side],
-        "bound": before,
-        "successes": int(np.sum(batch.successes)),
-        "episodes": len(batch.successes),
+    record = _test_record(refused, axis, side, before, None) | {
+        "episodes": len(placed),
+        "placed": int(np.sum(placed)),
+        "successes": int(np.sum(successes)),
         "goal_reward_mean": float(batch.goal_reward_mean),
         "decision": decision,
         "success_rate": rate,
@@ -261,3 +298,28 @@ def boundary_test(
     }
     state.tests.append(record)
     return record
+
+
+def _name(axis: int, side: int) -> str:
+    return f"{'xy'[axis]} {('low', 'high')[side]}"
+
+
+def _test_record(
+    refused: list[tuple[int, int]], axis: int | None, side: int | None, bound: float | None, skipped: str | None
+) -> dict[str, Any]:
+    """A test's record as a skipped test leaves it (no episodes, no decision); a run test overrides
+    the episodes' entries."""
+    return {
+        "axis": None if axis is None else "xy"[axis],
+        "side": None if side is None else ("low", "high")[side],
+        "bound": bound,
+        "refused": [_name(a, s) for a, s in refused],
+        "skipped": skipped,
+        "episodes": 0,
+        "placed": 0,
+        "successes": 0,
+        "goal_reward_mean": None,
+        "decision": None,
+        "success_rate": None,
+        "after": bound,
+    }

@@ -54,19 +54,21 @@ class AdrCallback(BaseCallback):
 
     def _episodes_at(self, bounds: AdrBounds) -> BoundaryBatch:
         """One batch of episodes with the box drawn inside ``bounds``: each one's success (the
-        scene's test) and the mean goal reward; the policy's mean plus its Gaussian noise, drawn
+        scene's test), whether its box stood inside ``bounds`` (not at the aligned fallback) and the
+        mean goal reward; the policy's mean plus its Gaussian noise, drawn
         from the ADR generator (torch's stays untouched)."""
         simulator, rng = self.simulator, self.state.rng
         simulator.adr_bounds = bounds
         policy = self.model.policy
         std = torch.exp(cast(torch.Tensor, policy.log_std)).detach().numpy()
         observation = simulator.reset(rng)
+        placed = simulator.box_placed.copy()
         goal = np.zeros(simulator.batch_size)
         while not simulator.done:
             mean, _ = policy.predict(observation, deterministic=True)
             action = np.clip(mean + std * rng.normal(size=mean.shape), -1.0, 1.0)
             observation, _, goal = simulator.step(action)
-        return BoundaryBatch(simulator.is_success(), float(goal.mean()))
+        return BoundaryBatch(simulator.is_success(), placed, float(goal.mean()))
 
     def _on_step(self) -> bool:
         return True

@@ -27,6 +27,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
 from toolimit.artifacts import atomic_path, save_json
+from toolimit.errors import InputError
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, fix_action_std, normalised_action_std
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
@@ -182,12 +183,14 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
     zip_path = directory / state.get("model", CHECKPOINT_ZIP)
     if not zip_path.is_file():
         return None
+    if env.adr is not None:  # before the model: a checkpoint of an earlier ADR rule is refused first
+        if "adr" not in state:
+            raise InputError(f"{state_path}: this checkpoint was written without --adr; start a new output folder")
+        env.adr.load_state_dict(state["adr"], str(state_path))
     model = PPO.load(zip_path, env=env, device="cpu")
     model.num_timesteps = int(state["num_timesteps"])
     model.policy.log_std.requires_grad_(bool(state["learn_std"]))
     env.restore_rng_state(state["env_rng"])
-    if env.adr is not None:
-        env.adr.load_state_dict(state["adr"])
     torch.set_rng_state(torch.tensor(state["torch_rng"], dtype=torch.uint8))
     name, keys, position, has_gauss, gauss = state["numpy_rng"]
     np.random.set_state((name, np.array(keys, dtype=np.uint32), position, has_gauss, gauss))

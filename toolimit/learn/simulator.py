@@ -28,7 +28,8 @@ Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each
 Goal box (spades): under ADR each instance's box is drawn inside the current ADR bounds
   (:meth:`AdrBounds.draw <toolimit.learn.adr.AdrBounds.draw>`: uniform, one position per instance,
   the scenes take a box per instance; redrawn where it would overlap the noisy deposit), without
-  the N(0, 0.01) noise (a box that finds no valid position in 100 draws stands at the aligned one);
+  the N(0, 0.01) noise (a box that finds no valid position in 100 draws stands at the aligned one,
+  and ``box_placed`` says so: ADR's boundary tests do not count its episode at the bound);
   ``reset(rng, box_positions)`` sets the positions instead (heat maps). The bounds start collapsed
   on the aligned position, so cloning rollouts run there.
 """
@@ -119,6 +120,10 @@ class TaskSimulator:
         #: (B, 2) each instance's goal box x, y (m, world frame) as the last reset set it (ADR or
         #: its ``box_positions``; zeros before).
         self.box_positions = np.zeros((self.batch_size, 2))
+        #: (B,) whether each instance's box stands where the last reset meant it to: False where
+        #: the ADR draw found no valid position inside the bounds and the box stands at the aligned
+        #: one (True without a draw).
+        self.box_placed = np.ones(self.batch_size, dtype=bool)
         self.dt = task.control_dt
         self.horizon = task.horizon
         self.q = np.zeros((self.batch_size, self.n_joints))
@@ -147,10 +152,12 @@ class TaskSimulator:
         noise = rng.normal(0.0, JOINT_NOISE_STD, size=(part.total, self.n_joints))
         self.q = np.clip(self.task.reference_q[0] + part.of(noise), self.robot.lower, self.robot.upper)
         params = self._noisy_params(rng, box_placed=box_positions is not None or self.adr_bounds is not None)
+        placed = np.ones(part.total, dtype=bool)
         if box_positions is not None and not all(map(self.box_validity(params), np.reshape(box_positions, (-1, 2)))):
             params = dict(self.task.params)  # the deposit's noise made a given box position invalid
         elif box_positions is None and self.adr_bounds is not None:
-            box_positions = self.adr_bounds.draw(rng, part.total, self.box_validity(params))
+            box_positions, placed = self.adr_bounds.draw(rng, part.total, self.box_validity(params))
+        self.box_placed = part.of(placed).copy()
         if box_positions is not None:
             whole = np.broadcast_to(np.asarray(box_positions, dtype=float), (part.total, 2))
             self.box_positions = part.of(whole).copy()

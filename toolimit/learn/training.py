@@ -310,7 +310,11 @@ def _learn_policy(
         return model
 
     previous = _previous_record(out_dir)
-    model, resumed = resume_or_start(out_dir, env, start)
+    try:
+        model, resumed = resume_or_start(out_dir, env, start)
+    except BaseException:  # a refused checkpoint or clone: the simulation's workers end here too
+        env.close()
+        raise
     curve = out_dir / CURVE_JSONL
     lines = _truncate_curve(curve, model.num_timesteps)
     checks = (
