@@ -14,7 +14,7 @@ from toolimit.cli import main
 from toolimit.demos import load_demo, save_demo
 from toolimit.scenes import register_scene
 from toolimit.tools import registry as tool_registry
-from toolimit.tools import roll_of
+from toolimit.tools import roll_of, tool_spec
 
 ALIGN_TESTS = Path(__file__).resolve().parents[1] / "align"
 
@@ -132,6 +132,11 @@ def test_writes_record_and_aligned_demo(capsys, tmp_path, demo_file):
     rotation = Rotation.from_quat(aligned["tip_quaternion_wxyz"], scalar_first=True).as_matrix()
     np.testing.assert_allclose(rotation[:, :, 2], demo.axis, atol=1e-9)
     np.testing.assert_allclose(roll_of(rotation), aligned["roll"], atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(demo.handle - demo.head, axis=1), 0.4)  # the scoop's tool length
+    assert np.abs(demo.head[:, 1]).max() < 1e-12  # in the x-z plane, up to the speed limit's rounding
+    # the motion the tool alone reached: its steered point moves at most 1 m/s per axis
+    steered = demo.head + tool_spec("spade").steered_offset * demo.axis
+    assert np.abs(np.diff(steered, axis=0)).max() <= 1.0 / 24.0 + 1e-12
     assert np.all(np.sum(aligned["tip_quaternion_wxyz"][1:] * aligned["tip_quaternion_wxyz"][:-1], axis=1) >= 0)
 
 
@@ -176,7 +181,8 @@ def test_real_spade_trajectory_aligns_in_the_planar_spade_scene(capsys, tmp_path
     assert best["reward"] >= 1.0  # at least one sand grain in the goal box, on average over 10 runs
     assert set(best["params"]) == {"sand_position", "goal_position"}
     aligned = np.load(out / "aligned_demo.npz")
-    assert np.all(aligned["tip_position"][:, 1] == 0.0)  # projected onto the x-z plane
+    # projected onto the x-z plane (the recording's y spans 0.58 m); the speed limit's rotations round off 1e-30 m
+    assert np.abs(aligned["tip_position"][:, 1]).max() < 1e-12
 
 
 def test_html_replay_of_a_3d_alignment(capsys, tmp_path):
@@ -197,9 +203,10 @@ def test_html_replay_of_a_3d_alignment(capsys, tmp_path):
 
 def test_real_hammer_recording_aligns_with_the_papers_z_offset_spread(capsys, tmp_path, video_demos_dir):
     """The real hammer file's heights are not measured from the ground (its strikes lie 1.3 m
-    below its nail): the default spread of p_z (0.1 m) cannot lift them, the paper's 0.5 m can."""
+    below its nail): the default spread of p_z (0.1 m) cannot lift them, the paper's 0.5 m can (seed 0:
+    first candidate at sample 335 with 2 of 10 rewarded replays needed; none in 3000 with 0.1 m)."""
     demo = str(video_demos_dir / "hammer_video1_aligned.npz")
-    common = ["align", "--tool", "hammer", "--world", "3d", "--demo", demo, "--samples", "300",
+    common = ["align", "--tool", "hammer", "--world", "3d", "--demo", demo, "--samples", "500",
               "--candidates", "1", "--workers", "1", "--quiet"]
     assert main([*common, "--out", str(tmp_path / "narrow")]) == 1
     assert main([*common, "--z-offset-std", "0.5", "--out", str(tmp_path / "paper")]) == 0, capsys.readouterr().err

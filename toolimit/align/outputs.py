@@ -1,9 +1,11 @@
 """The alignment's files: ``alignment.json`` (the search's record) and ``aligned_demo.npz``.
 
 Formats are the project's shared ones (see the README of the pipeline): the aligned demo is a
-demo file (head, handle, fps, tool) of the best candidate's motion in the scene's world frame plus
-the tool-frame poses (``tip_position`` (T, 3) m, ``tip_quaternion_wxyz`` (T, 4) scalar first), the
-per-frame roll (T,) rad, the scene's world and every scene parameter as ``param_<name>``.
+demo file (head, handle, fps, tool) of the best candidate's motion as the tool alone reached it
+(within the tool speed limit, :func:`toolimit.scenes.replay.speed_limited`) in the scene's world
+frame plus the same motion's tool-frame poses (``tip_position`` (T, 3) m, ``tip_quaternion_wxyz``
+(T, 4) scalar first), its per-frame roll (T,) rad, the scene's world and every scene parameter as
+``param_<name>``.
 ``candidates.npz`` stacks the same poses and parameters for all K kept candidates (axis 0), so that
 trajectory optimisation can select the candidate a robot reproduces best.
 """
@@ -19,6 +21,7 @@ from toolimit.align.search import AlignmentResult, Candidate
 from toolimit.artifacts import save_json, save_npz
 from toolimit.rotations import quaternions_wxyz
 from toolimit.scenes.base import pack_scene_params
+from toolimit.tools import roll_of
 
 ALIGNMENT_JSON = "alignment.json"
 ALIGNED_DEMO_NPZ = "aligned_demo.npz"
@@ -80,25 +83,27 @@ def _candidate_record(candidate: Candidate) -> dict[str, Any]:
 
 def aligned_demo_arrays(result: AlignmentResult, candidate: Candidate) -> dict[str, Any]:
     """The arrays of ``aligned_demo.npz`` for ``candidate``: its episode (the cut motion of a timed
-    goal, :mod:`toolimit.align.episode_cut`, with the cut's frames; else the whole motion)."""
-    aligned, roll, _ = result.aligned_motion(candidate)
+    goal, :mod:`toolimit.align.episode_cut`, with the cut's frames; else the whole motion) as the tool
+    alone reached it (:meth:`AlignmentResult.episode_poses`): head, handle and roll are those of the
+    reached poses, so that the demo and its tool-frame poses describe one motion."""
+    aligned = result.aligned_motion(candidate)[0]
     poses = result.episode_poses(candidate)
-    head, handle = aligned.head, aligned.handle
+    length = np.linalg.norm(aligned.handle - aligned.head, axis=-1)  # (T,) m, the demo's tool length
     cut: dict[str, Any] = {}
     if candidate.cut is not None:
-        head, handle, roll = candidate.cut.apply(head), candidate.cut.apply(handle), candidate.cut.apply(roll)
+        length = candidate.cut.apply(length)
         cut = {
             "first_reward_frame": np.int64(candidate.cut.first_reward_frame),
             "episode_start_frame": np.int64(candidate.cut.start),
         }
     arrays: dict[str, Any] = {
-        "head": head,
-        "handle": handle,
+        "head": poses.position,
+        "handle": poses.position + length[:, None] * poses.rotation[:, :, 2],
         "fps": np.float64(aligned.fps),
         "tool": np.str_(result.tool),
         "tip_position": poses.position,
         "tip_quaternion_wxyz": continuous_quaternions_wxyz(poses.rotation),
-        "roll": roll,
+        "roll": roll_of(poses.rotation),
         "scene_world": np.str_(result.world),
         "keypoints": result.keypoints,
         "reward": np.float64(candidate.reward),

@@ -39,7 +39,7 @@ SHORTLIST_SEED = 3000
 SHORTLIST_DIR = "shortlist"
 #: The cloned policy's deterministic success the learner asks before PPO (:func:`clone_reproduces`).
 CLONE_ACCEPTED_SUCCESS = 0.5
-#: Shortlisted candidates the learner clones at most before it keeps the last one whatever its clone.
+#: Shortlisted candidates the learner clones at most (then it learns the clone that succeeded most often).
 CLONE_ATTEMPTS = 3
 
 

@@ -41,6 +41,7 @@ from toolimit.learn.training import (
 )
 from toolimit.pipeline.settings import AlignSettings, EvaluationSettings, ExportSettings, TrajoptSettings
 from toolimit.pipeline.shortlist import (
+    CLONE_ACCEPTED_SUCCESS,
     CLONE_ATTEMPTS,
     ShortlistEntry,
     best_to_learn,
@@ -286,28 +287,32 @@ def learn_stage(
     (resumed from its checkpoint).
 
     With stage iii's shortlist (:mod:`toolimit.pipeline.shortlist`), the clone is checked before
-    PPO: where it does not reproduce its expert's success, the next shortlisted candidate is
-    cloned instead, up to :data:`CLONE_ATTEMPTS`, the last one learnt whatever its clone.
-    ``out/clone_attempts.json`` lists the clones set aside; ``task.npz`` names the candidate learnt."""
+    PPO: where it does not reproduce its expert's success, the next shortlisted candidate whose own
+    tracking succeeds at least as often as the check asks is cloned instead, up to
+    :data:`CLONE_ATTEMPTS` (a candidate whose expert fails cannot give a clone that succeeds). When
+    every clone is set aside, the one that succeeded most often is cloned again (the same clone:
+    cloning is seeded) and learnt. ``out/clone_attempts.json`` lists the clones set aside;
+    ``task.npz`` names the candidate learnt."""
     out = Path(out)
     if (out / CHECKPOINT_STATE).is_file():  # PPO started: resume the candidate it started on
         return learn_policy(LearningTask.load(out / TASK_NPZ), out, config, progress=progress)
     folders = [Path(trajectory)]
     if config.clone:  # without a clone (the baselines) there is nothing to check
-        folders += [
-            shortlist_folder(trajectory, entry.candidate) for entry in read_shortlist(trajectory)[1:CLONE_ATTEMPTS]
-        ]
+        others = [entry for entry in read_shortlist(trajectory)[1:] if entry.success_rate >= CLONE_ACCEPTED_SUCCESS]
+        folders += [shortlist_folder(trajectory, entry.candidate) for entry in others[: CLONE_ATTEMPTS - 1]]
+    if len(folders) == 1:  # nothing to fall back on: no check
+        return learn_policy(task_from_pipeline(alignment, folders[0], seed=config.seed), out, config, progress=progress)
     attempts_path = out / CLONE_ATTEMPTS_JSON
     attempts: list[dict[str, Any]] = json.loads(attempts_path.read_text()) if attempts_path.is_file() else []
-    for folder in folders[len(attempts) : -1]:
+    for folder in folders[len(attempts) :]:
         task = task_from_pipeline(alignment, folder, seed=config.seed)
         try:
             return learn_policy(task, out, config, progress=progress, accept_clone=clone_reproduces)
         except CloneRejected as rejected:
             attempts.append({"candidate": int(task.source["candidate"]), **rejected.record["clone_check"]})
             save_json(attempts_path, attempts)
-    task = task_from_pipeline(alignment, folders[-1], seed=config.seed)
-    return learn_policy(task, out, config, progress=progress)
+    best = max(range(len(attempts)), key=lambda k: (attempts[k]["success_rate"], -k))
+    return learn_policy(task_from_pipeline(alignment, folders[best], seed=config.seed), out, config, progress=progress)
 
 
 def learning_finished(folder: str | Path) -> bool:
