@@ -14,6 +14,13 @@ task it will build) and their trajectories executed there by the tracking contro
 expert, for ``episodes`` seeded episodes; the one whose tracking succeeds most often is kept (then
 the higher mean goal reward, then the robot's order). This is the figure's "trajectory" measure
 (:func:`toolimit.experiments.measure.measure_trajopt`), applied before learning rather than after.
+
+The shortlist is also the learner's fall-back (:func:`toolimit.pipeline.stages.learn_stage`): a
+clone may imitate well a motion too fragile to reproduce (measured on the real recording, seed 2:
+two candidates whose tracking succeeds in 75 % of the episodes cloned to 0 of 20, with 6,000
+cloning steps as with 20,000), so the clone is checked (:func:`clone_reproduces`) and, where it
+fails, the next shortlisted candidate whose own tracking succeeds as often as the check asks is
+cloned instead.
 """
 
 from __future__ import annotations
