@@ -41,10 +41,10 @@ from toolimit.learn.training import (
 )
 from toolimit.pipeline.settings import AlignSettings, EvaluationSettings, ExportSettings, TrajoptSettings
 from toolimit.pipeline.shortlist import (
-    CLONE_ACCEPTED_SUCCESS,
     CLONE_ATTEMPTS,
     ShortlistEntry,
     best_to_learn,
+    can_fall_back_on,
     clone_reproduces,
     read_shortlist,
     shortlist_folder,
@@ -288,8 +288,8 @@ def learn_stage(
 
     With stage iii's shortlist (:mod:`toolimit.pipeline.shortlist`), the clone is checked before
     PPO: where it does not reproduce its expert's success, the next shortlisted candidate whose own
-    tracking succeeds at least as often as the check asks is cloned instead, up to
-    :data:`CLONE_ATTEMPTS` (a candidate whose expert fails cannot give a clone that succeeds). When
+    tracking succeeds at all is cloned instead (:func:`~toolimit.pipeline.shortlist.can_fall_back_on`),
+    up to :data:`CLONE_ATTEMPTS`. When
     every clone is set aside, the one that succeeded most often is cloned again (the same clone:
     cloning is seeded) and learnt. ``out/clone_attempts.json`` lists the clones set aside;
     ``task.npz`` names the candidate learnt."""
@@ -298,7 +298,7 @@ def learn_stage(
         return learn_policy(LearningTask.load(out / TASK_NPZ), out, config, progress=progress)
     folders = [Path(trajectory)]
     if config.clone:  # without a clone (the baselines) there is nothing to check
-        others = [entry for entry in read_shortlist(trajectory)[1:] if entry.success_rate >= CLONE_ACCEPTED_SUCCESS]
+        others = [entry for entry in read_shortlist(trajectory)[1:] if can_fall_back_on(entry)]
         folders += [shortlist_folder(trajectory, entry.candidate) for entry in others[: CLONE_ATTEMPTS - 1]]
     if len(folders) == 1:  # nothing to fall back on: no check
         return learn_policy(task_from_pipeline(alignment, folders[0], seed=config.seed), out, config, progress=progress)
