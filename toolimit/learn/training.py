@@ -395,8 +395,8 @@ def _clone(
         "controller_successes": demonstrations.successes.tolist(),
         "clone_check": {
             "episodes": CLONE_CHECK_EPISODES,
-            "success_rate": check.record()["success_rate"],
-            "goal_reward_mean": check.record()["goal_reward_mean"],
+            "success_rate": float(np.mean(check.successes)),
+            "goal_reward_mean": float(np.mean(check.goal_rewards)),
         },
         **asdict(report),
     }

@@ -77,6 +77,17 @@ class ShortlistEntry:
             "tracking_goal_reward_mean": self.goal_reward_mean,
         }
 
+    @classmethod
+    def from_record(cls, record: dict[str, Any]) -> ShortlistEntry:
+        """The entry :meth:`record` wrote."""
+        return cls(
+            candidate=record["candidate"],
+            robot_reward=record["robot_reward"],
+            horizon=record["horizon"],
+            success_rate=record["tracking_success_rate"],
+            goal_reward_mean=record["tracking_goal_reward_mean"],
+        )
+
 
 def shortlist_in_learning_task(
     selection: RobotSelection,
@@ -137,18 +148,7 @@ def read_shortlist(trajectory_dir: str | os.PathLike[str]) -> list[ShortlistEntr
     if not path.is_file():
         return []
     entries = json.loads(path.read_text()).get("shortlist", [])
-    return learning_order(
-        [
-            ShortlistEntry(
-                candidate=entry["candidate"],
-                robot_reward=entry["robot_reward"],
-                horizon=entry["horizon"],
-                success_rate=entry["tracking_success_rate"],
-                goal_reward_mean=entry["tracking_goal_reward_mean"],
-            )
-            for entry in entries
-        ]
-    )
+    return learning_order([ShortlistEntry.from_record(entry) for entry in entries])
 
 
 def can_fall_back_on(entry: ShortlistEntry) -> bool:
