@@ -1,11 +1,20 @@
-"""Worker processes: results in order, and a stop that leaves no thread of the pool behind."""
+"""Worker processes: results in order, a stop that leaves no thread of the pool behind, and no
+worker outliving a parent that died without cleaning up."""
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
+import textwrap
 import threading
 import time
+from pathlib import Path
 
-from toolimit.workers import ordered_results
+import pytest
+
+from toolimit.workers import PARENT_CHECK_S, ordered_results
 
 
 def _slow_square(value: int) -> int:
@@ -34,3 +43,61 @@ def test_a_consumer_that_stops_early_leaves_no_manager_thread_running() -> None:
     assert ours, "the pool's manager thread runs while results are consumed"
     results.close()  # the consumer has enough: stop_workers
     assert not [thread for thread in ours if thread.is_alive()]
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie (Linux /proc)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _command_line(pid: int) -> bytes:
+    """Process ``pid``'s command line (Linux /proc), empty once it has ended."""
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads child processes from /proc")
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_workers_end_when_their_parent_dies_without_cleaning_up(tmp_path: Path, signum: int) -> None:
+    """A script that installed no handler dies at once on SIGTERM, as on SIGKILL: its workers, which
+    would wait on the task queue for ever, end within half a second."""
+    script = tmp_path / "parent.py"
+    script.write_text(
+        textwrap.dedent("""
+        import time
+        from toolimit.workers import PARENT_CHECK_S, ordered_results
+
+        def wait(value):
+            time.sleep(60)
+            return value
+
+        if __name__ == "__main__":
+            for _ in ordered_results(wait, [(value,) for value in range(8)], workers=2):
+                pass
+    """)
+    )
+    parent = subprocess.Popen([sys.executable, str(script)], cwd=tmp_path)
+    try:
+        deadline = time.monotonic() + 60
+        workers: list[int] = []
+        while time.monotonic() < deadline and len(workers) < 2:
+            children = Path(f"/proc/{parent.pid}/task/{parent.pid}/children").read_text().split()
+            workers = [int(pid) for pid in children if b"spawn_main" in _command_line(int(pid))]
+            time.sleep(0.05)
+        assert len(workers) == 2, "the two workers did not start"
+        time.sleep(3 * PARENT_CHECK_S)  # their watch has started
+        os.kill(parent.pid, signum)
+        parent.wait(timeout=5)
+        died = time.monotonic()
+        while any(_running(pid) for pid in workers) and time.monotonic() - died < 0.5:
+            time.sleep(0.02)
+        assert not [pid for pid in workers if _running(pid)], "a worker outlived its parent by 0.5 s"
+    finally:
+        if parent.poll() is None:
+            parent.kill()
+            parent.wait()

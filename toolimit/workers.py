@@ -16,6 +16,8 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import threading
+import time
 from collections.abc import Callable, Generator, Iterable
 from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any, TypeVar
@@ -26,6 +28,8 @@ from toolimit.interrupts import starting_processes
 Result = TypeVar("Result")
 #: Longest wait (s) for a stopped executor's manager thread to finish (:func:`stop_workers`).
 MANAGER_JOIN_S = 5.0
+#: How often (s) a worker checks that the process that started it still runs (:func:`_exit_with_parent`).
+PARENT_CHECK_S = 0.1
 
 
 #: Most worker processes used by default, however many cores the machine has.
@@ -83,8 +87,27 @@ def ordered_results(
 def _start_worker(initializer: Callable[..., None] | None, initargs: tuple[Any, ...]) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the process group is the parent's to handle
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # ignored now: no need to keep it blocked
+    _exit_with_parent()
     if initializer is not None:
         initializer(*initargs)
+
+
+def _exit_with_parent() -> None:
+    """End this worker within :data:`PARENT_CHECK_S` of its parent's death, however the parent died.
+
+    A parent that cannot clean up (SIGTERM to a script that installed no handler, SIGKILL, a crash)
+    would otherwise leave its workers waiting on the task queue for ever: they hold its write end
+    themselves, so it never reports the end of the input. A daemon thread watches the parent id,
+    which changes when the process is re-parented.
+    """
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_CHECK_S)
+        os._exit(1)  # the results have no reader any more: nothing to flush or save
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
 def stop_workers(executor: ProcessPoolExecutor) -> None:
