@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from toolimit.workers import PARENT_CHECK_S, ordered_results
+from toolimit.workers import PARENT_CHECK_S, cores_given, ordered_results, usable_cpus
 
 
 def _slow_square(value: int) -> int:
@@ -45,6 +45,13 @@ def test_a_consumer_that_stops_early_leaves_no_manager_thread_running() -> None:
     assert not [thread for thread in ours if thread.is_alive()]
 
 
+@pytest.mark.parametrize(("omp", "cores"), [("1", 1), ("100000", None), ("", None), ("two", None), ("0", None)])
+def test_the_cores_given_follow_omp_num_threads(monkeypatch: pytest.MonkeyPatch, omp: str, cores: int | None) -> None:
+    """Ray sets OMP_NUM_THREADS to a task's CPUs: never more than the usable ones, junk ignored."""
+    monkeypatch.setenv("OMP_NUM_THREADS", omp)
+    assert cores_given() == (cores or usable_cpus())
+
+
 def _running(pid: int) -> bool:
     """Whether process ``pid`` exists and is not a zombie (Linux /proc)."""
     try:
@@ -70,7 +77,7 @@ def test_workers_end_when_their_parent_dies_without_cleaning_up(tmp_path: Path, 
     script.write_text(
         textwrap.dedent("""
         import time
-        from toolimit.workers import PARENT_CHECK_S, ordered_results
+        from toolimit.workers import PARENT_CHECK_S, cores_given, ordered_results, usable_cpus
 
         def wait(value):
             time.sleep(60)

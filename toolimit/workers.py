@@ -38,7 +38,20 @@ MAX_DEFAULT_WORKERS = 4
 
 def worker_count(requested: int | None) -> int:
     """``requested`` workers, or one per CPU core up to :data:`MAX_DEFAULT_WORKERS` when None."""
-    return requested if requested is not None else max(1, min(MAX_DEFAULT_WORKERS, os.cpu_count() or 1))
+    return requested if requested is not None else min(MAX_DEFAULT_WORKERS, usable_cpus())
+
+
+def usable_cpus() -> int:
+    """The CPU cores this process may run on (its affinity where the system has one), at least 1."""
+    affinity = getattr(os, "sched_getaffinity", None)
+    return max(1, len(affinity(0)) if affinity is not None else os.cpu_count() or 1)
+
+
+def cores_given() -> int:
+    """The cores this process's threads should use: :func:`usable_cpus`, or fewer where
+    ``OMP_NUM_THREADS`` says so (Ray sets it to a task's CPUs, job schedulers to a job's)."""
+    given = os.environ.get("OMP_NUM_THREADS", "")
+    return max(1, min(usable_cpus(), int(given))) if given.isdigit() and int(given) > 0 else usable_cpus()
 
 
 def ordered_results(

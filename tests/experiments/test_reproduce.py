@@ -243,3 +243,14 @@ def test_a_two_node_ray_cluster_measures_the_cells_of_a_local_run(
     assert "/tmp/toolimit-task-" not in said  # the lines name the driver's folders
     assert (out / EXPERIMENT / "lfd" / "learning" / "policy.zip").is_file()  # the tasks' files came back
     assert (out / EXPERIMENT / "method" / "evaluation.json").is_file()
+
+
+def test_each_child_run_gets_its_share_of_the_cores_for_its_threads(monkeypatch):
+    from toolimit.experiments.reproduce import child_environment
+
+    monkeypatch.setattr("toolimit.experiments.reproduce.cores_given", lambda: 4)
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    assert child_environment(2)["NUMBA_NUM_THREADS"] == "2"
+    assert child_environment(8)["NUMBA_NUM_THREADS"] == "1"
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
+    assert child_environment(2)["NUMBA_NUM_THREADS"] == "3", "the user's own setting is kept"

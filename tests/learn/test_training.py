@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 
+import numba
 import numpy as np
 import pytest
 import torch
 
 from toolimit.errors import InputError, InvalidLearningConfig
-from toolimit.learn import BatchedTaskVecEnv
+from toolimit.learn import BatchedTaskVecEnv, shipped_task
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.ppo import PRESETS, make_ppo
 from toolimit.learn.training import CLONE_CHECK_EPISODES, CURVE_JSONL, LearningConfig, learn_policy, load_policy
@@ -49,6 +50,7 @@ def test_files_and_record(spade_task, tmp_path):
     model, task = load_policy(tmp_path)
     np.testing.assert_array_equal(_parameters(model), _parameters(outcome.model))
     assert task.horizon == horizon
+    assert record["sim_threads"] is None, "the planar scene takes no threads"
 
 
 def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
@@ -114,6 +116,12 @@ def test_unknown_preset_is_refused():
         ("clone_noise", float("nan"), "clone_noise: must be a finite number >= 0, got nan"),
         ("action_std", 0.0, "action_std: must be a finite number > 0 (rad/s), got 0.0"),
         ("reward", "shaped", "reward: unknown reward 'shaped'; choose one of sparse, dense"),
+        (
+            "sim_threads",
+            0,
+            f"sim_threads: must be an integer in 1..{numba.config.NUMBA_NUM_THREADS} (numba's NUMBA_NUM_THREADS), got 0",
+        ),
+        ("scene_kwargs", {"threads": 2}, "scene_kwargs: give the simulation's threads as sim_threads"),
     ],
 )
 def test_a_setting_no_run_can_use_is_refused_naming_its_field(field, value, said):
@@ -136,3 +144,27 @@ def test_learned_std_stays_above_the_authors_floor(spade_task, tmp_path):
     train(model, 2 * 2 * spade_task.horizon, tmp_path, checkpoint_every=10)
     std = torch.exp(model.policy.log_std).detach().numpy() * env.simulator.robot.velocity_limit
     assert np.all(std >= STD_FLOOR * (1 - 1e-5)), std
+
+
+@pytest.mark.parametrize(
+    ("cores", "numba_threads", "processes", "envs", "threads"),
+    [
+        (2, 2, 1, 16, 2),  # a two-core laptop: both cores
+        (8, 8, 2, 16, 4),  # shared among the processes
+        (8, 3, 1, 16, 3),  # NUMBA_NUM_THREADS lowered (reproduce --jobs)
+        (8, 8, 1, 2, 2),  # no more than the instances
+        (1, 8, 2, 16, 1),  # at least one
+    ],
+)
+def test_the_simulation_takes_the_cores_it_is_given(monkeypatch, cores, numba_threads, processes, envs, threads):
+    monkeypatch.setattr("toolimit.learn.training.cores_given", lambda: cores)
+    monkeypatch.setattr(numba, "get_num_threads", lambda: numba_threads)
+    config = LearningConfig(sim_processes=processes, envs=envs)
+    assert config.threads_per_process() == threads
+    assert LearningConfig(sim_threads=1, envs=envs).threads_per_process() == 1, "a given count is kept"
+
+
+def test_only_a_scene_that_takes_threads_gets_them(spade_task):
+    config = LearningConfig(sim_threads=1, scene_kwargs={"n_spheres": 20})
+    assert config.simulation_kwargs(shipped_task("spade", "3d")) == {"n_spheres": 20, "threads": 1}
+    assert LearningConfig(sim_threads=1).simulation_kwargs(spade_task) is None  # planar: none

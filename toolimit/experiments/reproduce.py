@@ -22,11 +22,13 @@ demonstrations, every method on ``_00`` and the method's stages on the others, a
 stages on the authors' real hammer recording; the UR5 and Talos with the spade on the real
 recording, the method's stages only; the 3D world's default settings). ``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
 reproduce`` process whose output goes to OUT/logs/<experiment>.log (the results do not depend on
-it: every experiment is seeded on its own).
+it: every experiment is seeded on its own), with its share of the cores for its simulation's
+threads (:func:`child_environment`).
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import time
@@ -45,6 +47,7 @@ from toolimit.interrupts import SIGNALS, Interrupted
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.pipeline.run import run_pipeline
 from toolimit.pipeline.settings import PipelineSettings
+from toolimit.workers import cores_given
 
 #: Where ``full`` finds the authors' real spade and hammer recordings: ``../shared`` beside the checkout.
 REAL_SPADE_RECORDING = Path("../shared/data/video_demos/spade_video1_aligned.npz")
@@ -174,6 +177,14 @@ def reproduce_experiment(
     return code
 
 
+def child_environment(jobs: int) -> dict[str, str]:
+    """The environment of a child run beside ``jobs`` - 1 others: this one, with numba's threads
+    (those a learning's simulation may use, ``LearningConfig.sim_threads``) set to the child's
+    share of the cores, unless the user set them."""
+    share = max(1, cores_given() // jobs)
+    return {"NUMBA_NUM_THREADS": str(share)} | dict(os.environ)
+
+
 def _run_children(
     chosen: Preset,
     out: Path,
@@ -203,7 +214,9 @@ def _run_children(
                 command += ["--methods", ",".join(methods), "--out", str(out), "--seed", str(seed), "--quiet"]
                 log = logs / f"{experiment.name}.log"
                 with open(log, "w") as output:
-                    child = subprocess.Popen(command, stdout=output, stderr=subprocess.STDOUT)
+                    child = subprocess.Popen(
+                        command, stdout=output, stderr=subprocess.STDOUT, env=child_environment(jobs)
+                    )
                 running[child] = experiment
                 say(experiment.name, f"started (log: {log})")
             time.sleep(0.5)

@@ -17,7 +17,7 @@ from toolimit.tools.frame import ToolPose
 from toolimit.tools.record import WORLDS
 from toolimit.tools.registry import find_tool, load_entry_point, register_tool, tool_record, tool_records
 
-__all__ = ["WORLDS", "available_scenes", "make_scene", "register_scene", "scripted_motion"]
+__all__ = ["WORLDS", "available_scenes", "make_scene", "register_scene", "scene_class", "scripted_motion"]
 
 
 def available_scenes() -> list[tuple[str, str]]:
@@ -35,12 +35,18 @@ def register_scene(tool: str, world: str, entry_point: str) -> None:
 
 def make_scene(tool: str, world: str, **kwargs: Any) -> Scene:
     """A new scene for ``tool`` in ``world``; keyword arguments go to its constructor."""
+    return scene_class(tool, world)(**kwargs)
+
+
+def scene_class(tool: str, world: str) -> type[Scene]:
+    """The scene class of ``tool`` in ``world`` (what :func:`make_scene` builds); InputError for a
+    pair without one."""
     check_world(world)
     record = tool_record(tool)
     if world not in record.scenes:
         tools = sorted(name for name, scene_world in available_scenes() if scene_world == world)
         raise InputError(f"unknown tool {tool!r} for world {world!r}; known tools: {', '.join(tools)}")
-    return load_entry_point(record.scenes[world])(**kwargs)
+    return load_entry_point(record.scenes[world])  # type: ignore[no-any-return]
 
 
 def scripted_motion(tool: str, world: str, params: SceneParams, fps: float = CONTROL_FPS) -> ToolPose:
