@@ -16,6 +16,7 @@ from toolimit.experiments.cells import METHODS, CellResult
 from toolimit.experiments.report import markdown_table
 from toolimit.learn.kinesthetic import SELECTION_JSON
 from toolimit.learn.task import TASK_NPZ, LearningTask
+from toolimit.pipeline.settings import PipelineSettings
 
 REPO = Path(__file__).resolve().parents[2]
 EXPERIMENT = "spade-planar-planar3-spade_03"
@@ -254,3 +255,14 @@ def test_each_child_run_gets_its_share_of_the_cores_for_its_threads(monkeypatch)
     assert child_environment(8)["NUMBA_NUM_THREADS"] == "1"
     monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
     assert child_environment(2)["NUMBA_NUM_THREADS"] == "3", "the user's own setting is kept"
+
+
+def test_the_real_hammer_recording_aligns_with_its_wider_height_offset():
+    """Its heights are not ground-referenced: the default z offset puts every sample's board off the
+    ground, so the full preset gives that experiment, and only it, the README's 0.5 m."""
+    from toolimit.experiments.reproduce import REAL_HAMMER_RECORDING, preset
+
+    full = preset("full")
+    offsets = {e.demo: full.settings(e, seed=0).align.search.z_offset_std for e in full.experiments}
+    assert offsets.pop(REAL_HAMMER_RECORDING) == 0.5
+    assert set(offsets.values()) == {PipelineSettings.for_world("3d").align.search.z_offset_std}

@@ -47,6 +47,9 @@ class Experiment:
     robot: str
     demo: Path
     methods: tuple[str, ...] = METHODS
+    #: (dotted settings path, value) pairs in which this experiment departs from its preset's
+    #: settings, e.g. a wider z offset for a recording whose heights are not ground-referenced.
+    settings_changes: tuple[tuple[str, Any], ...] = ()
 
     @property
     def name(self) -> str:
