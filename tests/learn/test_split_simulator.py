@@ -87,11 +87,15 @@ def test_a_scene_drawing_instance_by_instance_is_refused(spade_task):
 
 STEPPING = textwrap.dedent(
     """
-    import os, sys
+    import faulthandler, os, signal, sys
     from multiprocessing import resource_tracker
     import numpy as np
     from toolimit.learn import BatchedTaskVecEnv, shipped_task
     if __name__ == "__main__":
+        # a script started from a terminal: Ctrl-C's default, whatever the test process has
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        faulthandler.register(signal.SIGUSR1)  # the test asks for the stacks if the process hangs
         env = BatchedTaskVecEnv(shipped_task("spade", "3d"), 2, seed=0, scene_kwargs={"n_spheres": 20}, processes=2)
         env.reset()
         worker = env.simulator._processes[0].pid
@@ -112,13 +116,19 @@ def alive(pid: int) -> bool:
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
-def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum):
+def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum, tmp_path):
     """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) or SIGTERM to the main
     process: the worker and multiprocessing's resource tracker end within 0.5 s of the main
     process, and the shared buffer's file is gone."""
     environment = {**os.environ, "PYTHONPATH": str(REPO)}
+    stderr = tmp_path / "stderr.txt"
     main = subprocess.Popen(
-        [sys.executable, "-c", STEPPING], stdout=subprocess.PIPE, text=True, env=environment, start_new_session=True
+        [sys.executable, "-c", STEPPING],
+        stdout=subprocess.PIPE,
+        stderr=stderr.open("w"),
+        text=True,
+        env=environment,
+        start_new_session=True,
     )
     try:
         children = [int(pid) for pid in main.stdout.readline().split()]  # type: ignore[union-attr]
@@ -128,7 +138,12 @@ def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum):
             os.killpg(main.pid, signum)
         else:
             main.send_signal(signum)
-        main.wait(timeout=60)  # its own exit (torch, numba) may take seconds on a loaded machine
+        try:
+            main.wait(timeout=60)  # its own exit (torch, numba) may take seconds on a loaded machine
+        except subprocess.TimeoutExpired:
+            main.send_signal(signal.SIGUSR1)
+            time.sleep(1.0)
+            pytest.fail(f"the main process did not end within 60 s of the signal; its stacks:\n{stderr.read_text()}")
         ended = time.monotonic()
         while any(alive(pid) for pid in children) and time.monotonic() - ended < 0.5:
             time.sleep(0.01)
