@@ -7,7 +7,7 @@ candidate with each robot at each height and replays it in its scene (10 replays
 robot replay's spheres, how many candidates earn, the median over candidates, and the kept
 trajectory's median position and rotation errors.
 
-    /work/notes/heavy python benchmarks/base_heights.py --out runs/base_heights \
+    python benchmarks/base_heights.py --out runs/base_heights \
         --json benchmarks/results/base_heights.json
 """
 
@@ -19,14 +19,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from talos_selection import RECORDING, aligned_recording, selection_row
 
-from toolimit.align.config import AlignmentConfig
-from toolimit.pipeline.settings import AlignSettings, TrajoptSettings
-from toolimit.pipeline.stages import align_stage
 from toolimit.robots import make_robot
-from toolimit.trajopt.selection import load_candidates, select_by_robot_execution
 
-RECORDING = Path(__file__).resolve().parents[1] / "../shared/data/video_demos/spade_video1_aligned.npz"
 #: (robot, base height above the scene's floor in m, label)
 VARIANTS = (
     ("panda", 0.0, "former: on the floor"),
@@ -44,38 +40,15 @@ def main() -> None:
     parser.add_argument("--candidates", type=int, default=40)
     parser.add_argument("--starts", type=int, default=2)
     args = parser.parse_args()
-    out = Path(args.out)
-    started = time.perf_counter()
-    align_stage(
-        args.recording,
-        "spade",
-        "3d",
-        out / "alignment",
-        AlignSettings(search=AlignmentConfig(candidates=args.candidates), workers=1),
-        progress=False,
-    )
-    _, world, candidates = load_candidates(out / "alignment")
-    rows: list[dict] = [{"alignment_s": round(time.perf_counter() - started, 1), "candidates": len(candidates)}]
-    print(json.dumps(rows[0]), flush=True)
+    world, candidates, first = aligned_recording(args.recording, Path(args.out), args.candidates)
+    rows: list[dict] = [first]
+    print(json.dumps(first), flush=True)
     for name, height, label in VARIANTS:
         started = time.perf_counter()
         robot = make_robot(name, tool="spade", base_height=height)
-        options = TrajoptSettings(starts=args.starts).track_options()
-        selection = select_by_robot_execution(robot, candidates, "spade", world, options, progress=False)
-        rewards = selection.robot_rewards
-        row: dict = {
-            "robot": name,
-            "base_height_m": height,
-            "variant": label,
-            "best_spheres": float(np.nanmax(rewards)),
-            "earning_candidates": int(np.sum(rewards > 0)),
-            "median_spheres": float(np.nanmedian(rewards)),
-        }
-        if selection.best is not None:
-            kept = selection.trajectories[selection.best]
-            assert kept is not None
-            row["kept_candidate"] = int(selection.best)
-            row["median_position_error_m"] = float(np.median(kept.position_error))
+        selected, kept = selection_row(robot, candidates, world, args.starts)
+        row: dict = {"robot": name, "base_height_m": height, "variant": label, **selected}
+        if kept is not None:
             row["median_rotation_error_rad"] = float(np.median(kept.rotation_error))
         row["wall_time_s"] = round(time.perf_counter() - started, 1)
         print(json.dumps(row), flush=True)

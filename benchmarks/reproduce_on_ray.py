@@ -5,7 +5,7 @@ Runs ``toolimit reproduce --preset quick`` twice into fresh folders, in this ord
 stopped by the command: its start-up and shut-down are in the figure). Prints each wall time, their
 ratio (the overhead of Ray on one machine, and of running each learning run as its own task) and
 whether every cell's per-episode goal rewards agree (to 1e-6) and its success rates are equal.
-Run it alone on the machine (``flock /work/heavy.lock python benchmarks/reproduce_on_ray.py``):
+Run it alone on the machine (``python benchmarks/reproduce_on_ray.py``):
 the two runs share the cores with nothing else.
 
     python benchmarks/reproduce_on_ray.py [--out /tmp/reproduce_on_ray]

@@ -8,7 +8,7 @@ and both success rates (:func:`success_rates`), and writes them as JSON. The iss
 For every candidate it also says how its first reward came (:func:`first_reward_motion`): the
 head's speed and the roll's turn over that control step.
 
-    flock /work/heavy.lock python benchmarks/timed_tools_replay.py --out /tmp/timed --json results.json
+    python benchmarks/timed_tools_replay.py --out runs/timed --json benchmarks/results/timed_tools_replay.json
 """
 
 from __future__ import annotations

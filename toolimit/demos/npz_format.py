@@ -4,7 +4,7 @@ Three kinds of file become a :class:`ToolDemo`:
 
 * the project's own ``.npz``: keys ``head`` (T, 3), ``handle`` (T, 3) (world frame, metres),
   ``fps`` (scalar, Hz), ``tool`` (str); other keys are allowed and ignored by :func:`load_demo`;
-* the real aligned trajectories of the paper's authors (``/work/shared/data/video_demos``): keys
+* the real aligned trajectories of the paper's authors (``../shared/data/video_demos`` beside the checkout): keys
   ``tip_position`` (T, 3) metres and ``tip_quaternion_wxyz`` (T, 4) scalar first, ``fps``, plus
   scene parameters; the pose of the tool *tip frame* becomes head and handle points (see
   :func:`tip_frame_handle`);
