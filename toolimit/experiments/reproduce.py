@@ -208,8 +208,8 @@ def _run_children(
     say: Report,
     results: Callable[[], object],
 ) -> int:
-    """Each experiment in a child ``toolimit reproduce``, ``jobs`` at a time, its output in
-    OUT/logs/<experiment>.log; ``results()`` after each. The children share the terminal's process
+    """Each experiment in a child ``toolimit reproduce``, ``jobs`` at a time, its output appended to
+    OUT/logs/<experiment>.log (a resumed reproduction keeps the earlier sittings' lines); ``results()`` after each. The children share the terminal's process
     group, so a Ctrl-C reaches them too: each saves its progress and stops; a signal sent to this
     process alone is passed on. The exit code: the worst of the children's (an interrupted child
     interrupts the whole reproduction)."""
@@ -227,7 +227,7 @@ def _run_children(
                 command = [sys.executable, "-m", "toolimit", "reproduce", "--preset", chosen.name, *selector]
                 command += ["--methods", ",".join(methods), "--out", str(out), "--seed", str(seed), "--quiet"]
                 log = logs / f"{experiment.name}.log"
-                with open(log, "w") as output:
+                with open(log, "a") as output:
                     child = subprocess.Popen(
                         command, stdout=output, stderr=subprocess.STDOUT, env=child_environment(jobs)
                     )
