@@ -209,10 +209,11 @@ def _run_children(
     results: Callable[[], object],
 ) -> int:
     """Each experiment in a child ``toolimit reproduce``, ``jobs`` at a time, its output appended to
-    OUT/logs/<experiment>.log (a resumed reproduction keeps the earlier sittings' lines); ``results()`` after each. The children share the terminal's process
-    group, so a Ctrl-C reaches them too: each saves its progress and stops; a signal sent to this
-    process alone is passed on. The exit code: the worst of the children's (an interrupted child
-    interrupts the whole reproduction)."""
+    OUT/logs/<experiment>.log (a resumed reproduction keeps the earlier sittings' lines);
+    ``results()`` after each. The children share the terminal's process group, so a Ctrl-C reaches
+    them too: each saves its progress and stops; a signal sent to this process alone is passed on.
+    The exit code: the worst of the children's (an interrupted child interrupts the whole
+    reproduction)."""
     logs = out / "logs"
     logs.mkdir(parents=True, exist_ok=True)
     pending = list(chosen.experiments)
