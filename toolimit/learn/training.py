@@ -69,8 +69,8 @@ class LearningConfig:
             world; the 3D world's preset (:data:`toolimit.pipeline.settings.WORLD_PRESETS`) gives
             1.5 M (the Panda spade's training success climbs from 0.03 to 1.0 by 1.2 M).
         envs: B, instances stepped together.
-        preset: PPO settings: the authors' or the project's looser gradient clip (a key of
-            :data:`toolimit.learn.ppo.PRESETS`).
+        preset: PPO settings: the authors' or the project's (a looser gradient clip and RAdam), a
+            key of :data:`toolimit.learn.ppo.PRESETS`.
         clone: behaviour cloning before PPO (without it: PPO from a random policy with a learned std, the
             sparse-reward baseline).
         clone_rollouts: tracking-controller rollouts to clone (1 = the authors' single rollout).
