@@ -10,7 +10,8 @@ clip 0.05, gradient norm clipped at 0.001, gamma 0.999, lambda 1, no advantage n
 ``"toolimit"`` clips the gradient less and warms Adam up (RAdam; see :data:`PRESETS` for the
 measured trade-off). Rollouts hold whole episodes (``episodes_per_update`` x H steps per
 environment), so an update boundary is an episode boundary: a checkpoint there, with the
-environments' and torch's random states, resumes the run exactly. A learned standard deviation is kept above the authors' floor of 0.01 rad/s.
+environments' and torch's random states, resumes the run exactly. A learned standard deviation is
+kept above the authors' floor of 0.01 rad/s.
 """
 
 from __future__ import annotations
