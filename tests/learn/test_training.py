@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from toolimit.errors import InputError, InvalidLearningConfig
-from toolimit.learn import BatchedTaskVecEnv, shipped_task
+from toolimit.learn import BatchedTaskVecEnv, shipped_task, training
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.ppo import PRESETS, make_ppo
 from toolimit.learn.training import CLONE_CHECK_EPISODES, CURVE_JSONL, LearningConfig, learn_policy, load_policy
@@ -84,6 +84,24 @@ def test_a_finished_run_continues_to_a_larger_budget_exactly(spade_task, tmp_pat
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
+
+
+def test_a_resumed_runs_progress_starts_from_its_earlier_steps(spade_task, tmp_path, monkeypatch):
+    """The bar of a resumed run starts at the steps already made, so that tqdm's rate and ETA count
+    only this sitting's steps against this sitting's time."""
+    per_update = spade_task.horizon * 2
+    learn_policy(spade_task, tmp_path, LearningConfig(**{**TINY.__dict__, "timesteps": per_update}), progress=False)
+    bars, progress_bar = [], training.progress_bar
+
+    def recording_bar(*args, **kwargs):
+        bars.append(progress_bar(*args, **kwargs))
+        return bars[-1]
+
+    monkeypatch.setattr(training, "progress_bar", recording_bar)
+    learn_policy(spade_task, tmp_path, LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update}))
+    ppo_bar = next(bar for bar in bars if bar.desc == "PPO")
+    assert ppo_bar.format_dict["initial"] == per_update and ppo_bar.n == 3 * per_update
+    assert ppo_bar.total == 3 * per_update
 
 
 def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path):

@@ -26,6 +26,7 @@ import numpy as np
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
+from tqdm.std import tqdm
 
 from toolimit.artifacts import save_json
 from toolimit.errors import InvalidLearningConfig
@@ -218,17 +219,27 @@ class _Curve(BaseCallback):
     ):
         super().__init__()
         self.path, self.on_record, self.checks = path, on_record, checks
-        self.bar = progress_bar(total=total, desc="PPO", unit="step", disable=not progress, leave=False)
+        self.total, self.progress = total, progress
+        self.bar: tqdm | None = None  # made when training starts, from the steps already done
         self.returns: list[float] = []
         self.successes: list[bool] = []
         self.goals: list[float] = []
         self.pending: dict[str, Any] | None = None
 
     def _on_training_start(self) -> None:
-        self.bar.n = self.model.num_timesteps
-        self.bar.refresh()
+        # A resumed run's earlier steps are the bar's start, not progress of this sitting: tqdm's
+        # rate (and so the ETA) counts only the steps made since.
+        self.bar = progress_bar(
+            total=self.total,
+            initial=self.model.num_timesteps,
+            desc="PPO",
+            unit="step",
+            disable=not self.progress,
+            leave=False,
+        )
 
     def _on_step(self) -> bool:
+        assert self.bar is not None  # made at the training's start
         self.bar.update(self.training_env.num_envs)
         for info in self.locals["infos"]:
             if "episode" in info:
@@ -251,6 +262,7 @@ class _Curve(BaseCallback):
         if self.pending is not None:
             if self.checks is not None:
                 self.checks.add_training_success(self.pending["env_steps"], self.pending["success_rate"])
+            assert self.bar is not None
             self.bar.set_postfix(
                 success=f"{self.pending['success_rate']:.2f}",
                 goal=f"{self.pending['goal_reward_mean']:.1f}",
@@ -282,7 +294,8 @@ class _Curve(BaseCallback):
 
     def _on_training_end(self) -> None:
         self._write()
-        self.bar.close()
+        if self.bar is not None:
+            self.bar.close()
 
 
 class CloneRejected(Exception):
