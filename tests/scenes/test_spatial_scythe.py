@@ -10,7 +10,15 @@ from toolimit.scenes.base import InvalidSceneParameters, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.scythe_cut import scythe_cut_rule
 from toolimit.scenes.spatial.scythe import SpatialScytheScene
-from toolimit.scenes.spatial.sweep import LEVEL, pull, scripted_sweep
+from toolimit.scenes.spatial.sweep import (
+    DRAW_SPEED,
+    LEVEL,
+    RAMP,
+    edge_centre_offset,
+    pull,
+    ramped_distances,
+    scripted_sweep,
+)
 from toolimit.tools import ToolPose, rotation_z, tool_spec
 
 PATCH = np.array([1.0, -0.5, 0.0])
@@ -53,6 +61,29 @@ def test_scripted_pulls_cut_every_stalk_within_the_first_second():
     np.testing.assert_array_equal(scene.goal_reward(), scene.n_stalks)
     assert scene.is_success().all()
     assert np.all(scene.cut_time < 1.0)
+
+
+def test_the_scripted_draw_holds_the_handle_up_and_crosses_the_patch_at_full_speed():
+    """The handle end stands above the blade (where a robot grips), the edge moves towards the
+    handle along the patch's length, from rest to rest, at DRAW_SPEED wherever it is over the patch."""
+    poses = scripted_sweep({"grass_position": PATCH})
+    handle = poses.position + tool_spec("scythe").length * poses.rotation[:, :, 2]
+    assert np.all(handle[:, 2] - poses.position[:, 2] > 0.2)
+    edge = poses.position + edge_centre_offset(poses.rotation[0])  # (T, 3), one rotation throughout
+    step = np.diff(edge, axis=0) * 24.0  # m/s between control steps
+    assert np.all(step[:, 0] <= 1e-12) and np.allclose(step[:, 1:], 0.0)  # towards the handle: -x
+    assert step[0, 0] == 0.0 and step[-1, 0] == 0.0
+    over = np.abs(edge[1:, 0] - PATCH[0]) <= 0.2
+    np.testing.assert_allclose(-step[over, 0], DRAW_SPEED, rtol=1e-9)
+
+
+def test_ramped_distances_rise_hold_and_fall_at_the_given_speed():
+    distances = ramped_distances(1.5, RAMP, 0.5, 1.0 / 240)
+    speeds = np.diff(distances) * 240
+    assert distances[0] == 0.0 and distances[-1] == pytest.approx(2 * RAMP + 0.5)
+    assert np.all(speeds >= 0.0) and speeds.max() <= 1.5 + 1e-9
+    assert speeds[0] < 0.01 and speeds[-1] < 0.05  # from rest, back to rest
+    assert np.sum(np.isclose(speeds, 1.5)) * 1.5 / 240 == pytest.approx(0.5, abs=0.01)
 
 
 @pytest.mark.parametrize("speed", [1.6, 2.4])

@@ -43,6 +43,9 @@ STALK_REACH = 0.1
 MAX_CUT_HEIGHT = 0.1
 MAX_NORMAL_ANGLE = np.pi / 6
 CUTTING_THRESHOLD = 0.02
+#: The authors' grass patch (``grass_patch_len``, ``grass_patch_width``): length along world x and
+#: width along y, m; both scythe scenes' default and the scripted draw's (:mod:`toolimit.scenes.spatial.sweep`).
+PATCH_SIZE = (0.4, 0.1)
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,7 @@ from toolimit.scenes.base import (
     world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
-from toolimit.scenes.scythe_cut import MAX_CUT_HEIGHT, ScytheCutRule, scythe_cut_rule
+from toolimit.scenes.scythe_cut import MAX_CUT_HEIGHT, PATCH_SIZE, ScytheCutRule, scythe_cut_rule
 from toolimit.scenes.spatial.tool_motion import interpolate_poses
 from toolimit.tools import ToolPose
 
@@ -63,7 +63,7 @@ class PlanarScytheScene(WindowedGoalScene):
         control_dt: float = 1.0 / CONTROL_FPS,
         substeps: int = 10,
         stalk_count: int = 10,
-        patch_size: tuple[float, float] = (0.4, 0.1),
+        patch_size: tuple[float, float] = PATCH_SIZE,
         stalk_width: float = 0.005,
         max_cut_height: float = MAX_CUT_HEIGHT,
         success_window: float = 1.0,

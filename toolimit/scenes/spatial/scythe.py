@@ -34,7 +34,7 @@ from toolimit.scenes.base import (
     require_reset,
     world_position,
 )
-from toolimit.scenes.scythe_cut import MAX_CUT_HEIGHT, ScytheCutRule, scythe_cut_rule
+from toolimit.scenes.scythe_cut import MAX_CUT_HEIGHT, PATCH_SIZE, ScytheCutRule, scythe_cut_rule
 from toolimit.scenes.spatial.tool_motion import SweptTool, tool_snapshot
 from toolimit.tools import ToolPose
 
@@ -59,7 +59,7 @@ class SpatialScytheScene(WindowedGoalScene):
     def __init__(
         self,
         n_stalks: int = 10,
-        patch_size: tuple[float, float] = (0.4, 0.1),
+        patch_size: tuple[float, float] = PATCH_SIZE,
         stalk_width: float = 0.005,
         stalk_height: float = 0.3,
         max_cut_height: float = MAX_CUT_HEIGHT,
