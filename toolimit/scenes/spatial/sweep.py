@@ -7,17 +7,18 @@ moving towards the handle at more than 1 m/s, with the snath within 30 degrees o
 
 The blade (0.35 m) is shorter than the patch (0.4 x 0.1 m), so a pull across the patch's width
 leaves stalks at its ends. :func:`scripted_sweep` draws along the patch's length instead: the blade
-level across the patch (tool x along world -y), the snath along world +x with its handle end raised
-:data:`SNATH_ELEVATION`, pulled towards the handle (world -x) over the patch and 5 cm beyond each
-end at :data:`DRAW_SPEED`. The speed rises from rest over a run-up of :data:`RAMP` and falls back
-over as long a run-out, a half cosine each, so that a robot arm can follow it: it is the LfD
-baseline's kinesthetic demonstration (:mod:`toolimit.learn.kinesthetic`). Measured with the Panda
-on the figure's ``scythe_00`` learning task (stage iii's tracking, 10 replays, seed 0), the mean
-stalks cut by its replay at real time for a run-up of 0.25 / 0.3 / 0.35 m at 1.5 m/s: 3.6 / 8.9
-(the draw towards +x) / 9.2 of 10; at 1.7 m/s with 0.3 m: 3.0. The tool alone cuts all 10 at
-1.5 m/s (at 1.3 m/s 8.7-9.0: the approach test is met in fewer sub-steps). The motion this
-replaced, two pulls across the patch's width pushed back in between, held the handle end below
-the blade and cut nothing in the Panda's replays at any pace from 1 to 5.
+level across the patch (tool x along world -y), the snath along world x with the handle towards -x,
+raised :data:`SNATH_ELEVATION`, pulled towards the handle (world -x) over the patch and
+:data:`DRAW_MARGIN` beyond each end at :data:`DRAW_SPEED`. The speed rises from rest over a run-up
+of :data:`RAMP` and falls back over as long a run-out, a half cosine each, so that a robot arm can
+follow it: it is the LfD baseline's kinesthetic demonstration (:mod:`toolimit.learn.kinesthetic`).
+Measured with the Panda on the figure's ``scythe_00`` learning task (stage iii's tracking, 10
+replays, seed 0): this draw's replay at real time cuts 9.7 of the 10 stalks on average. Variants,
+each held still 3 steps first: at 1.5 m/s a run-up of 0.25 m cut 3.6, 0.35 m 9.2; at 1.7 m/s with
+0.3 m 3.0 (the arm lags the faster start). The tool alone cuts all 10 at 1.5 m/s (at 1.3 m/s
+8.7-9.0: the approach test is met in fewer sub-steps). The motion this replaced, two pulls across
+the patch's width pushed back in between, held the handle end below the blade (the sign of the
+raise was wrong) and cut nothing in the Panda's replays at any pace from 1 to 5.
 """
 
 from __future__ import annotations
