@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from toolimit.scenes.base import InvalidSceneParameters, Scene
+from toolimit.scenes.base import CONTROL_FPS, InvalidSceneParameters, Scene
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.scythe_cut import scythe_cut_rule
 from toolimit.scenes.spatial.scythe import SpatialScytheScene
@@ -70,7 +70,7 @@ def test_the_scripted_draw_holds_the_handle_up_and_crosses_the_patch_at_full_spe
     handle = poses.position + tool_spec("scythe").length * poses.rotation[:, :, 2]
     assert np.all(handle[:, 2] - poses.position[:, 2] > 0.2)
     edge = poses.position + edge_centre_offset(poses.rotation[0])  # (T, 3), one rotation throughout
-    step = np.diff(edge, axis=0) * 24.0  # m/s between control steps
+    step = np.diff(edge, axis=0) * CONTROL_FPS  # m/s between control steps
     assert np.all(step[:, 0] <= 1e-12) and np.allclose(step[:, 1:], 0.0)  # towards the handle: -x
     assert step[0, 0] == 0.0 and step[-1, 0] == 0.0
     over = np.abs(edge[1:, 0] - PATCH[0]) <= 0.2

@@ -220,7 +220,7 @@ class _Curve(BaseCallback):
         super().__init__()
         self.path, self.on_record, self.checks = path, on_record, checks
         self.total, self.progress = total, progress
-        self.bar: tqdm | None = None  # made when training starts, from the steps already done
+        self.bar: tqdm  # made when training starts, from the steps already done
         self.returns: list[float] = []
         self.successes: list[bool] = []
         self.goals: list[float] = []
@@ -239,7 +239,6 @@ class _Curve(BaseCallback):
         )
 
     def _on_step(self) -> bool:
-        assert self.bar is not None  # made at the training's start
         self.bar.update(self.training_env.num_envs)
         for info in self.locals["infos"]:
             if "episode" in info:
@@ -262,7 +261,6 @@ class _Curve(BaseCallback):
         if self.pending is not None:
             if self.checks is not None:
                 self.checks.add_training_success(self.pending["env_steps"], self.pending["success_rate"])
-            assert self.bar is not None
             self.bar.set_postfix(
                 success=f"{self.pending['success_rate']:.2f}",
                 goal=f"{self.pending['goal_reward_mean']:.1f}",
@@ -294,8 +292,7 @@ class _Curve(BaseCallback):
 
     def _on_training_end(self) -> None:
         self._write()
-        if self.bar is not None:
-            self.bar.close()
+        self.bar.close()
 
 
 class CloneRejected(Exception):

@@ -78,15 +78,8 @@ def ramped_distances(speed: float, ramp: float, cruise: float, dt: float) -> np.
         return speed / 2.0 * (t - rise / np.pi * np.sin(np.pi * t / rise))
 
     t = np.minimum(np.arange(int(np.ceil(total / dt)) + 1) * dt, total)
-    return np.where(
-        t < rise,
-        ramped(np.minimum(t, rise)),
-        np.where(
-            t <= rise + cruise / speed,
-            ramp + speed * (t - rise),
-            2.0 * ramp + cruise - ramped(np.clip(total - t, 0.0, rise)),
-        ),
-    )
+    cruising = ramp + speed * (t - rise)
+    return np.where(t < rise, ramped(t), np.where(t <= total - rise, cruising, 2.0 * ramp + cruise - ramped(total - t)))
 
 
 def scripted_sweep(
@@ -98,7 +91,8 @@ def scripted_sweep(
     head positions and (T, 3, 3) rotations (world frame) at ``fps``."""
     patch = np.asarray(params["grass_position"], dtype=float)
     rotation = rotation_z(-np.pi / 2) @ raised(SNATH_ELEVATION)
-    towards_handle = np.array([-1.0, 0.0, 0.0])  # the snath's horizontal direction, world
+    towards_handle = rotation[:, 2] * [1.0, 1.0, 0.0]  # the snath's horizontal direction, world: -x
+    towards_handle /= np.linalg.norm(towards_handle)
     cruise = PATCH_SIZE[0] + 2.0 * DRAW_MARGIN
     distances = ramped_distances(speed, RAMP, cruise, 1.0 / fps)
     start = np.array([patch[0], patch[1], height]) - towards_handle * (RAMP + cruise / 2.0)
