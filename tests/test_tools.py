@@ -117,6 +117,9 @@ def test_a_taken_name_is_refused_unless_overwritten(fresh_registry):
         ({"synthetic_motion": "m:"}, "synthetic_motion: expected an entry point"),
         ({"planar_plane": "yz"}, "planar_plane must be one of xz, xy"),
         ({"shapes": "tool_geometry.spade_shapes"}, "shapes: expected an entry point"),
+        ({"settings": {"3d": {"learning.timesteps": 1}}}, "settings: no scene in world '3d'"),
+        ({"settings": {"planar": 5}}, r"settings\['planar'\]: expected a mapping of dotted paths"),
+        ({"settings": {"planar": {"": 5}}}, r"settings\['planar'\]: expected a mapping of dotted paths"),
     ],
 )
 def test_a_bad_record_is_one_input_error(fields, message):

@@ -16,7 +16,8 @@ from toolimit.cli.run import RUN_FLAGS, pipeline_settings
 from toolimit.cli.trajopt import TRAJOPT_FLAGS
 from toolimit.learn.training import LearningConfig
 from toolimit.pipeline import AlignSettings, EvaluationSettings, ExportSettings, PipelineSettings, TrajoptSettings
-from toolimit.pipeline.settings import WORLD_PRESETS, get_value
+from toolimit.pipeline.settings import QUICK, WORLD_PRESETS, get_value, with_values
+from toolimit.tools import tool_record, tool_records
 
 #: A command's smallest valid argument list, its flags and the settings it starts from.
 COMMANDS = {
@@ -52,6 +53,29 @@ def test_run_and_learn_without_flags_give_the_worlds_preset(world: str) -> None:
     learn = parse(["learn", "--env", "toolimit/SpadePlanar-v0", "--out", "o"])
     assert learning_config(learn, world) == expected.learning
     assert learning_config(learn) == LearningConfig()
+
+
+def test_a_tools_own_values_come_over_the_worlds_and_under_quick_and_flags() -> None:
+    own = dict(tool_record("scythe").settings["3d"])
+    assert own["learning.timesteps"] != WORLD_PRESETS["3d"]["learning.timesteps"]  # else nothing to test
+    argv = ["run", "--tool", "scythe", "--robot", "panda", "--demo", "d.npz", "--out", "o"]
+    settings = pipeline_settings(parse(argv))
+    assert settings == with_values(PipelineSettings.for_world("3d"), own).with_seed(0)
+    assert pipeline_settings(parse([*argv, "--quick"])).learning.timesteps == QUICK["learning.timesteps"]
+    assert pipeline_settings(parse([*argv, "--timesteps", "1234"])).learning.timesteps == 1234
+    learn = parse(["learn", "--task", "task.npz", "--out", "o"])
+    assert learning_config(learn, "3d", "scythe") == settings.learning
+    assert learning_config(learn, "3d", "spade") == PipelineSettings.for_world("3d").learning
+    helps = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    shown = f"(default: 300000 planar, 1500000 3d, {own['learning.timesteps']} 3d scythe)"
+    assert shown in " ".join(helps["learn"].format_help().split())
+
+
+def test_every_tools_own_values_name_settings_fields() -> None:
+    for record in tool_records():
+        for world, values in record.settings.items():
+            settings = PipelineSettings.for_world(world, tool=record.name)  # an unknown field raises here
+            assert all(get_value(settings, path) == value for path, value in values.items())
 
 
 def test_trajopt_and_run_agree() -> None:
@@ -91,7 +115,8 @@ def test_every_flag_names_a_documented_field(flags: tuple[Flag, ...], settings: 
 def test_the_help_shows_the_settings_default() -> None:
     helps = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
     text = " ".join(helps["run"].format_help().split())
-    assert "(default: 5 planar, 40 3d)" in text and "(default: 300000 planar, 1500000 3d)" in text
+    assert "(default: 5 planar, 40 3d)" in text  # the scythe's value is the 3D world's: not repeated
+    assert "(default: 300000 planar, 1500000 3d, " in text  # then the scythe's own
     assert "(default: 0.0001)" in " ".join(helps["trajopt"].format_help().split())
 
 

@@ -87,7 +87,9 @@ def field_help(cls: type, name: str) -> str:
 
 def add_flags(parser: argparse.ArgumentParser, flags: Sequence[Flag], defaults: Mapping[str, Any]) -> None:
     """Add ``flags`` to ``parser``. ``defaults`` maps a label to the settings the command starts
-    from (one entry with label ``""``, or one per world); the help shows each one's value."""
+    from (one entry with label ``""``, or one per world, and one per tool in a world where it has
+    its own values, :func:`~toolimit.pipeline.settings.defaults_by_label`); the help shows each
+    one's value, a tool's ("3d scythe") only where it differs from its world's ("3d")."""
     example = next(iter(defaults.values()))
     for flag in flags:
         owner = _owner_class(example, flag.path)
@@ -96,7 +98,11 @@ def add_flags(parser: argparse.ArgumentParser, flags: Sequence[Flag], defaults: 
         if len(set(map(repr, values.values()))) == 1:
             shown = flag.show(next(iter(values.values())))
         else:
-            shown = ", ".join(f"{flag.show(value)} {label}" for label, value in values.items())
+            shown = ", ".join(
+                f"{flag.show(value)} {label}"
+                for label, value in values.items()
+                if " " not in label or repr(value) != repr(values.get(label.rsplit(" ", 1)[0]))
+            )
         text = _first_sentence(field_help(owner, flag.field))
         if kind is bool:
             default = next(iter(values.values()))

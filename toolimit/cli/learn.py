@@ -24,7 +24,7 @@ from toolimit.cli import (
 from toolimit.cli.flags import Flag, add_flags, apply_flags
 from toolimit.learn.ppo import PRESETS
 from toolimit.learn.simulator import REWARDS
-from toolimit.pipeline.settings import WORLD_PRESETS, PipelineSettings
+from toolimit.pipeline.settings import PipelineSettings, defaults_by_label
 
 if TYPE_CHECKING:
     from toolimit.learn.task import LearningTask
@@ -57,12 +57,13 @@ LEARNING_FLAGS = (
 )
 
 
-def learning_config(args: argparse.Namespace, world: str | None = None) -> LearningConfig:
-    """The LearningConfig of the flags: ``world``'s preset (the plain defaults when None) with the
-    flags given; CliError naming the flag of a value the config refuses."""
+def learning_config(args: argparse.Namespace, world: str | None = None, tool: str | None = None) -> LearningConfig:
+    """The LearningConfig of the flags: ``world``'s preset with ``tool``'s own values (the plain
+    defaults when ``world`` is None) with the flags given; CliError naming the flag of a value the
+    config refuses."""
     from toolimit.learn.training import LearningConfig
 
-    base = LearningConfig() if world is None else PipelineSettings.for_world(world).learning
+    base = LearningConfig() if world is None else PipelineSettings.for_world(world, tool=tool).learning
     return apply_flags(base, LEARNING_FLAGS, args)
 
 
@@ -77,7 +78,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--trajectory", type=Path, help="`toolimit trajopt` output folder (with --alignment)")
     parser.add_argument("--robot", default=None, help="with --env: another robot's shipped task")
     add_out_argument(parser)
-    add_flags(parser, LEARNING_FLAGS, {world: PipelineSettings.for_world(world).learning for world in WORLD_PRESETS})
+    add_flags(parser, LEARNING_FLAGS, {label: settings.learning for label, settings in defaults_by_label().items()})
     parser.add_argument("--rerun", type=Path, default=None, help="also save the learning curves as a rerun .rrd")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(func=run)
@@ -110,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     check_output_file(args.rerun, "--rerun", ".rrd")
     task = load_task(args)
-    config = learning_config(args, task.world)
+    config = learning_config(args, task.world, task.tool)
     try:
         outcome = learn_policy(task, args.out, config, progress=not args.quiet)
     except KeyboardInterrupt as stop:  # interrupts.Interrupted (SIGINT, SIGTERM) or a plain Ctrl-C

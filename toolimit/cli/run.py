@@ -27,7 +27,7 @@ from toolimit.cli.align import SEARCH_FLAGS
 from toolimit.cli.flags import Flag, add_flags, apply_flags, nested
 from toolimit.cli.learn import LEARNING_FLAGS
 from toolimit.cli.trajopt import TRAJOPT_FLAGS
-from toolimit.pipeline.settings import QUICK, WORLD_PRESETS, PipelineSettings
+from toolimit.pipeline.settings import QUICK, WORLD_PRESETS, PipelineSettings, defaults_by_label
 
 #: The flags of ``toolimit run``: the stage commands' own (same names, help and defaults), but for
 #: the seed, which ``--seed`` gives every stage (:meth:`PipelineSettings.with_seed`).
@@ -51,7 +51,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--demo", required=True, type=Path, help="demonstration file")
     add_world_argument(parser, "3d")
     add_out_argument(parser, "output folder (one sub-folder per stage)")
-    add_flags(parser, RUN_FLAGS, {world: PipelineSettings.for_world(world) for world in WORLD_PRESETS})
+    add_flags(parser, RUN_FLAGS, defaults_by_label())
     add_seed_argument(parser, "seed of every stage (the evaluation's: this + 1000)")
     parser.add_argument(
         "--quick", action="store_true", help=f"tiny budgets for a first try or CI (flags given explicitly win): {QUICK}"
@@ -69,7 +69,7 @@ def pipeline_settings(args: argparse.Namespace) -> PipelineSettings:
         raise CliError(f"--world: unknown world {args.world!r}; choose one of {', '.join(WORLD_PRESETS)}")
     if args.seed < 0:
         raise CliError(f"--seed: must be an integer >= 0, got {args.seed}")
-    base = PipelineSettings.for_world(args.world, quick=args.quick).with_seed(args.seed)
+    base = PipelineSettings.for_world(args.world, args.quick, args.tool).with_seed(args.seed)
     return apply_flags(base, RUN_FLAGS, args)
 
 

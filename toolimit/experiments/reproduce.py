@@ -68,9 +68,9 @@ class Preset:
     quick: bool = False
 
     def settings(self, experiment: Experiment, seed: int) -> PipelineSettings:
-        """The pipeline settings of ``experiment``: its world's (the evaluation's episodes are the
-        cells'), seeded, with the experiment's own changes."""
-        settings = PipelineSettings.for_world(experiment.world, quick=self.quick).with_seed(seed)
+        """The pipeline settings of ``experiment``: its world's with its tool's own (the evaluation's
+        episodes are the cells'), seeded, with the experiment's own changes."""
+        settings = PipelineSettings.for_world(experiment.world, self.quick, experiment.tool).with_seed(seed)
         return with_values(settings, dict(experiment.settings_changes))
 
 

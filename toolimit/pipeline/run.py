@@ -84,7 +84,7 @@ def run_pipeline(
     """Run (or resume) every stage for ``tool`` and ``robot`` in ``world`` from ``demo`` (a
     ToolDemo or a demonstration file) into ``out``; see the module docstring.
 
-    ``settings`` default to :meth:`PipelineSettings.for_world`. ``on_stage`` receives each
+    ``settings`` default to :meth:`PipelineSettings.for_world` (the world's, with the tool's own). ``on_stage`` receives each
     stage's lines for a person. ``ray`` (:data:`~toolimit.distributed.RayTarget`): the alignment's
     samples and the robot selection's candidates run on a Ray cluster instead of local worker
     processes (same results); the learning run is one process, here. Raises InputError when a
@@ -93,7 +93,7 @@ def run_pipeline(
     (:mod:`toolimit.interrupts`) after the interrupted stage saved its checkpoint.
     """
     out = Path(out)
-    settings = settings if settings is not None else PipelineSettings.for_world(world)
+    settings = settings if settings is not None else PipelineSettings.for_world(world, tool=tool)
     with ray_cluster(ray) if ray else contextlib.nullcontext():  # stopped before learning, which runs here
         run_stages(demo, out, tool, robot, world, settings, progress, on_stage, STAGES[:2], ray=ray)
     run_stages(demo, out, tool, robot, world, settings, progress, on_stage, STAGES[2:])

@@ -3,7 +3,8 @@
 A stage's settings hold the library's defaults by reference (``AlignmentConfig``,
 ``TrackingWeights``, ``TrackOptions``, ``LearningConfig`` and the export's constants are the one
 place each number is written); where a world needs its own value, :data:`WORLD_PRESETS` holds it,
-and :data:`QUICK` the tiny budgets of a first try or CI. The ``toolimit`` command's flags are
+where a tool needs its own, the tool's record (``ToolRecord.settings``), and :data:`QUICK` the tiny
+budgets of a first try or CI. The ``toolimit`` command's flags are
 built from these fields, so the command and a Python caller start from the same values.
 """
 
@@ -21,6 +22,7 @@ from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
 from toolimit.errors import InvalidSetting
 from toolimit.learn.evaluate import EVALUATION_SEED
 from toolimit.learn.training import LearningConfig
+from toolimit.tools import tool_record, tool_records
 from toolimit.trajopt.problem import TrackingWeights
 from toolimit.trajopt.track import INITIALISATIONS, TrackOptions
 
@@ -176,12 +178,15 @@ class PipelineSettings:
     export: ExportSettings = ExportSettings()
 
     @classmethod
-    def for_world(cls, world: str, quick: bool = False) -> PipelineSettings:
-        """The defaults with ``world``'s preset (:data:`WORLD_PRESETS`), and the tiny budgets of
-        :data:`QUICK` when ``quick``; InvalidSetting for an unknown world."""
+    def for_world(cls, world: str, quick: bool = False, tool: str | None = None) -> PipelineSettings:
+        """The defaults with ``world``'s preset (:data:`WORLD_PRESETS`), then ``tool``'s own values
+        in that world (``ToolRecord.settings``, :mod:`toolimit.tools.record`), then the tiny budgets
+        of :data:`QUICK` when ``quick``; InvalidSetting for an unknown world, InputError for an
+        unknown tool."""
         if world not in WORLD_PRESETS:
             raise InvalidSetting("world", f"unknown world {world!r}; choose one of {', '.join(WORLD_PRESETS)}")
-        return with_values(cls(), {**WORLD_PRESETS[world], **(QUICK if quick else {})})
+        own = tool_record(tool).settings.get(world, {}) if tool is not None else {}
+        return with_values(cls(), {**WORLD_PRESETS[world], **own, **(QUICK if quick else {})})
 
     def with_seed(self, seed: int) -> PipelineSettings:
         """The same settings with every stage seeded by ``seed`` (the evaluation at ``seed`` +
@@ -206,6 +211,17 @@ WORLD_PRESETS: dict[str, dict[str, Any]] = {
     "planar": {},
     "3d": {"align.search.candidates": 40, "learning.timesteps": 1_500_000},
 }
+
+
+def defaults_by_label() -> dict[str, PipelineSettings]:
+    """The defaults a command starts from, by label: each world's (``"3d"``), and each tool's in a
+    world where it has values of its own (``"3d scythe"``), for the help's defaults."""
+    defaults = {world: PipelineSettings.for_world(world) for world in WORLD_PRESETS}
+    for record in tool_records():
+        for world in record.settings:
+            defaults[f"{world} {record.name}"] = PipelineSettings.for_world(world, tool=record.name)
+    return defaults
+
 
 #: Budgets of a first try or CI (``toolimit run --quick``): minutes on a laptop.
 QUICK: dict[str, Any] = {
@@ -255,4 +271,5 @@ __all__ = [
     "QUICK",
     "TrajoptSettings",
     "WORLD_PRESETS",
+    "defaults_by_label",
 ]

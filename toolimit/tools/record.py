@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Literal
+from typing import Any, Literal
 
 from toolimit.errors import InputError
 
@@ -76,6 +76,10 @@ class ToolRecord:
         world_view: ``"module:function"`` drawing the state of its 3D scene,
             ``function(snapshot) -> list[Element]`` (:mod:`toolimit.viz.world_elements`); None for
             a tool without 3D views.
+        settings: world -> the tool's own pipeline settings there, by dotted path into
+            :class:`~toolimit.pipeline.settings.PipelineSettings` (``{"learning.timesteps":
+            6_000_000}``), over the world's preset (:meth:`PipelineSettings.for_world`): what a
+            tool needs beyond the other tools, measured.
     """
 
     spec: ToolSpec
@@ -86,13 +90,19 @@ class ToolRecord:
     planar_plane: str = "xz"
     shapes: str | None = None
     world_view: str | None = None
+    settings: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         """Checks every field (InputError naming the bad one) and freezes the mappings."""
         if not isinstance(self.spec, ToolSpec):
             raise InputError(f"ToolRecord.spec must be a ToolSpec, got {type(self.spec).__name__}")
         name = self.spec.name
-        for attribute in ("scenes", "scripted_motions", "default_robots"):
+        for world, values in self.settings.items():
+            if not isinstance(values, Mapping) or not all(isinstance(path, str) and path for path in values):
+                raise InputError(f"tool {name!r}: settings[{world!r}]: expected a mapping of dotted paths to values")
+        frozen = {world: MappingProxyType(dict(values)) for world, values in self.settings.items()}
+        object.__setattr__(self, "settings", frozen)
+        for attribute in ("scenes", "scripted_motions", "default_robots", "settings"):
             mapping = getattr(self, attribute)
             unknown = sorted(set(mapping) - set(WORLDS))
             if unknown:
@@ -102,7 +112,7 @@ class ToolRecord:
             object.__setattr__(self, attribute, MappingProxyType(dict(mapping)))
         if not self.scenes:
             raise InputError(f"tool {name!r}: scenes: a tool needs a scene in at least one world")
-        for attribute in ("scripted_motions", "default_robots"):
+        for attribute in ("scripted_motions", "default_robots", "settings"):
             without_scene = sorted(set(getattr(self, attribute)) - set(self.scenes))
             if without_scene:
                 raise InputError(f"tool {name!r}: {attribute}: no scene in world {without_scene[0]!r}")
