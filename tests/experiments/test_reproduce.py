@@ -266,3 +266,16 @@ def test_the_real_hammer_recording_aligns_with_its_wider_height_offset():
     offsets = {e.demo: full.settings(e, seed=0).align.search.z_offset_std for e in full.experiments}
     assert offsets.pop(REAL_HAMMER_RECORDING) == 0.5
     assert set(offsets.values()) == {PipelineSettings.for_world("3d").align.search.z_offset_std}
+
+
+def test_every_learner_of_an_experiment_has_its_tools_budget():
+    """The scythe's rows run at the scythe's own PPO cap (the authors' 14 M), the others at the 3D
+    world's; the baselines learn with the method's settings (``measure_method``)."""
+    from toolimit.experiments.reproduce import preset
+    from toolimit.tools import tool_record
+
+    full = preset("full")
+    caps = {e.tool: full.settings(e, seed=0).learning.timesteps for e in full.experiments}
+    assert caps["scythe"] == tool_record("scythe").settings["3d"]["learning.timesteps"]
+    assert caps["spade"] == caps["hammer"] == PipelineSettings.for_world("3d").learning.timesteps
+    assert preset("quick").settings(preset("quick").experiments[0], seed=0).learning.timesteps < 10_000

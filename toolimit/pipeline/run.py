@@ -84,13 +84,14 @@ def run_pipeline(
     """Run (or resume) every stage for ``tool`` and ``robot`` in ``world`` from ``demo`` (a
     ToolDemo or a demonstration file) into ``out``; see the module docstring.
 
-    ``settings`` default to :meth:`PipelineSettings.for_world` (the world's, with the tool's own). ``on_stage`` receives each
-    stage's lines for a person. ``ray`` (:data:`~toolimit.distributed.RayTarget`): the alignment's
-    samples and the robot selection's candidates run on a Ray cluster instead of local worker
-    processes (same results); the learning run is one process, here. Raises InputError when a
-    finished stage in ``out`` was made for another tool, world or robot, StageFoundNothing when the
-    alignment or the robot's selection finds nothing, and KeyboardInterrupt
-    (:mod:`toolimit.interrupts`) after the interrupted stage saved its checkpoint.
+    ``settings`` default to :meth:`PipelineSettings.for_world` (the world's, with the tool's own).
+    ``on_stage`` receives each stage's lines for a person. ``ray``
+    (:data:`~toolimit.distributed.RayTarget`): the alignment's samples and the robot selection's
+    candidates run on a Ray cluster instead of local worker processes (same results); the learning
+    run is one process, here. Raises InputError when a finished stage in ``out`` was made for
+    another tool, world or robot, StageFoundNothing when the alignment or the robot's selection
+    finds nothing, and KeyboardInterrupt (:mod:`toolimit.interrupts`) after the interrupted stage
+    saved its checkpoint.
     """
     out = Path(out)
     settings = settings if settings is not None else PipelineSettings.for_world(world, tool=tool)

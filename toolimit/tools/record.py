@@ -78,7 +78,7 @@ class ToolRecord:
             a tool without 3D views.
         settings: world -> the tool's own pipeline settings there, by dotted path into
             :class:`~toolimit.pipeline.settings.PipelineSettings` (``{"learning.timesteps":
-            6_000_000}``), over the world's preset (:meth:`PipelineSettings.for_world`): what a
+            14_000_000}``), over the world's preset (:meth:`PipelineSettings.for_world`): what a
             tool needs beyond the other tools, measured.
     """
 
