@@ -118,3 +118,59 @@ def test_a_config_rebuilt_from_its_record_has_its_rule():
     assert LearningConfig(**asdict(config)) == config  # as notebooks and learning.json hand it back
     with pytest.raises(InvalidLearningConfig):
         LearningConfig(stop=3)
+
+
+class _ScriptedChecks:
+    """Stands in for the checks' rollout: the given success rates, one per check, in order."""
+
+    def __init__(self, rates):
+        self.rates = list(rates)
+
+    def __call__(self, model, env, deterministic=True):
+        rate = self.rates.pop(0)
+
+        class Outcome:
+            def record(self):
+                return {"success_rate": rate, "goal_reward_mean": 10.0 * rate}
+
+        return Outcome()
+
+
+def test_the_run_keeps_its_best_checked_policy_and_continues_from_its_last(spade_task, tmp_path, monkeypatch):
+    """Checks of 0.5, 1.0, 0.25, 1.0, 0.0: the policy of the 4th (the best, latest among equals) is
+    the run's; the last update's stays the checkpoint a larger budget continues from."""
+    per_update = spade_task.horizon * 2
+    never = StopRule(every=1, episodes=2, training_success=0.0, held=9)
+    monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([0.5, 1.0, 0.25, 1.0, 0.0]))
+    config = _config(timesteps=6 * per_update, clone_steps=20, stop=never)
+    outcome = learn_policy(spade_task, tmp_path / "run", config, progress=False)
+    kept = outcome.record["kept_policy"]
+    assert kept["env_steps"] == 4 * per_update and kept["success_rate"] == 1.0
+    assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{4 * per_update}.zip"}
+    # the kept policy is the 4th update's, as a run of four updates without checks has it
+    four = learn_policy(spade_task, tmp_path / "four", _config(**{**config.__dict__, "timesteps": 4 * per_update,
+                                                                   "early_stop": False}), progress=False)
+    np.testing.assert_allclose(_parameters(outcome.model), _parameters(four.model), rtol=0, atol=1e-6)
+    six = learn_policy(spade_task, tmp_path / "six", _config(**{**config.__dict__, "early_stop": False}), progress=False)
+    assert not np.allclose(_parameters(outcome.model), _parameters(six.model))
+    assert json.loads((tmp_path / "run" / "checkpoint.json").read_text())["model"] == "checkpoint.zip"
+    # a larger budget continues from the last update, not from the kept policy; a later check at
+    # the kept one's success (checks after updates 6 and 7: 0.0, 1.0) takes its place
+    monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([0.0, 1.0]))
+    longer = learn_policy(spade_task, tmp_path / "run", _config(**{**config.__dict__, "timesteps": 8 * per_update}),
+                          progress=False)
+    assert longer.record["resumed"] and longer.record["ppo_env_steps"] == 8 * per_update
+    assert longer.record["kept_policy"]["env_steps"] == 7 * per_update
+    seven = learn_policy(spade_task, tmp_path / "seven", _config(**{**config.__dict__, "timesteps": 7 * per_update,
+                                                                     "early_stop": False}), progress=False)
+    np.testing.assert_allclose(_parameters(longer.model), _parameters(seven.model), rtol=0, atol=1e-6)
+    assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{7 * per_update}.zip"}
+
+
+def test_without_keep_best_the_run_is_its_last_update(spade_task, tmp_path, monkeypatch):
+    per_update = spade_task.horizon * 2
+    monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([1.0, 0.0]))
+    config = _config(timesteps=2 * per_update, clone_steps=20, keep_best=False, stop=StopRule(every=1, episodes=2, held=9))
+    outcome = learn_policy(spade_task, tmp_path, config, progress=False)
+    assert "kept_policy" not in outcome.record and not list(tmp_path.glob("best*"))
+    assert json.loads((tmp_path / "checkpoint.json").read_text())["model"] == "policy.zip"

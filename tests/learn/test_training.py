@@ -38,7 +38,9 @@ def test_files_and_record(spade_task, tmp_path):
     outcome = learn_policy(spade_task, tmp_path, config, progress=False)
     for name in ("task.npz", "cloning.json", "checkpoint.json", "policy.zip", "learning.json", CURVE_JSONL):
         assert (tmp_path / name).is_file(), name
-    assert not (tmp_path / "checkpoint.zip").exists()  # the final checkpoint is policy.zip: one copy
+    # the last update's model stays the checkpoint; policy.zip is the best check's, here (no check
+    # in two updates) the last update's (tests/learn/test_early_stop.py: the kept policy)
+    assert json.loads((tmp_path / "checkpoint.json").read_text())["model"] == "checkpoint.zip"
     record = json.loads((tmp_path / "learning.json").read_text())
     assert record["ppo_env_steps"] == 2 * horizon * 2
     assert record["cloning_env_steps"] == (2 + CLONE_CHECK_EPISODES) * horizon, "the rollouts, then the clone's check"

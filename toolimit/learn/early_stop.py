@@ -34,6 +34,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from toolimit.errors import InvalidLearningConfig
 from toolimit.learn.evaluate import rollout
+from toolimit.learn.kept_policy import KeptPolicy
 from toolimit.learn.task import LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
@@ -85,6 +86,8 @@ class EarlyStop(BaseCallback):
         rule: the stopping rule.
         curve: the curve lines written so far (a resumed run's), whose checks count.
         scene_kwargs, reward: the training environment's (a check runs the same scene).
+        kept: where each check's policy is offered (:mod:`toolimit.learn.kept_policy`); None keeps
+            none.
     """
 
     def __init__(
@@ -94,9 +97,11 @@ class EarlyStop(BaseCallback):
         curve: Sequence[dict[str, Any]] = (),
         scene_kwargs: dict[str, Any] | None = None,
         reward: str = "sparse",
+        kept: KeptPolicy | None = None,
     ):
         super().__init__()
         self.rule = rule
+        self.kept = kept
         self.env = BatchedTaskVecEnv(task, rule.episodes, scene_kwargs=scene_kwargs, reward=reward)
         checks = [line for line in curve if CHECK_SUCCESS in line]
         self.passed = 0  # checks in a row that passed, up to the latest
@@ -128,6 +133,8 @@ class EarlyStop(BaseCallback):
             CHECK_TRAINING: training,
         }
         self.checked_steps = steps
+        if self.kept is not None:
+            self.kept.offer(self.model, steps, outcome["success_rate"], outcome["goal_reward_mean"])
         self.passed = self.passed + 1 if self._passes(outcome["success_rate"], training) else 0
         if self.passed >= self.rule.held:
             self.stopped_at = steps

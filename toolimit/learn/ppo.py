@@ -241,11 +241,13 @@ def train(
     directory: str | os.PathLike[str],
     checkpoint_every: int = 10,
     callbacks: list[BaseCallback] | None = None,
+    final_file: str = POLICY_ZIP,
 ) -> PPO:
     """Run PPO until ``model.num_timesteps`` reaches ``total_timesteps``, checkpointing into
-    ``directory`` every ``checkpoint_every`` updates; ``policy.zip`` is the final model and the final
-    checkpoint (a larger budget continues from it). Interrupted (Ctrl-C), the last checkpoint stays:
-    :func:`resume_or_start` continues it."""
+    ``directory`` every ``checkpoint_every`` updates; ``final_file`` is the final model and the final
+    checkpoint (a larger budget continues from it): ``policy.zip``, or ``checkpoint.zip`` when the
+    run's policy is another one (:mod:`toolimit.learn.kept_policy`). Interrupted (Ctrl-C), the last
+    checkpoint stays: :func:`resume_or_start` continues it."""
     directory = Path(directory)
     remaining = total_timesteps - model.num_timesteps
     if remaining > 0:
@@ -255,7 +257,7 @@ def train(
             reset_num_timesteps=False,
             log_interval=1,
         )
-    save_checkpoint(model, directory, POLICY_ZIP)
+    save_checkpoint(model, directory, final_file)
     return model
 
 

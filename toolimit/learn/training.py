@@ -2,9 +2,12 @@
 
 ``learn_policy(task, out_dir, LearningConfig(...))`` writes into ``out_dir``:
 ``task.npz`` (the task), ``cloning.json`` (data and losses), ``checkpoint.zip/.json`` (every few
-updates; once finished, ``checkpoint.json`` names ``policy.zip``, the one copy of the final model), ``curve.jsonl`` (one line per update: env steps, mean return, success rate, goal reward,
-standard deviation, KL; under ADR the goal box bounds ``adr_low``, ``adr_high`` the update's
-episodes were drawn in), ``policy.zip`` (the final SB3 model) and ``learning.json`` (settings,
+updates, and the last update's model once finished; without ``keep_best``, ``checkpoint.json``
+then names ``policy.zip``, the one copy of the final model), ``best.json`` and ``best-<steps>.zip``
+(the best check's model, :mod:`toolimit.learn.kept_policy`), ``curve.jsonl`` (one line per
+update: env steps, mean return, success rate, goal reward, standard deviation, KL; under ADR the
+goal box bounds ``adr_low``, ``adr_high`` the update's episodes were drawn in), ``policy.zip``
+(the run's policy, an SB3 model: the best check's with ``keep_best``) and ``learning.json`` (settings,
 env steps, wall time split between simulation and learning; under ADR the final bounds and every
 boundary test, :meth:`toolimit.learn.adr.AdrState.record`). Run again on the same folder, it
 resumes from the last checkpoint; a finished run returns at once.
@@ -36,8 +39,10 @@ from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
 from toolimit.learn.early_stop import EarlyStop, StopRule
 from toolimit.learn.evaluate import evaluate
+from toolimit.learn.kept_policy import KeptPolicy
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
+    CHECKPOINT_ZIP,
     POLICY_ZIP,
     PRESETS,
     PpoSettings,
@@ -96,6 +101,9 @@ class LearningConfig:
             :mod:`toolimit.learn.early_stop`) instead of spending the whole budget (the paper's
             fixed budget when off); never under ADR.
         stop: the early-stopping rule (checks every few updates, success to hold).
+        keep_best: the run's policy is the one of its best check (:mod:`toolimit.learn.kept_policy`:
+            the highest success, the latest among equals), not the last update's; with
+            ``early_stop`` only (its checks).
         sim_processes: processes stepping the B instances (3D tasks; the same numbers whatever
             their count, :mod:`toolimit.learn.split_simulator`). One by default: two were slower
             on the Panda spade while other jobs kept the second core busy (5,294 against 5,853
@@ -125,6 +133,7 @@ class LearningConfig:
     adr_every: int = ADR_EVERY
     early_stop: bool = True
     stop: StopRule = StopRule()
+    keep_best: bool = True
     sim_processes: int = 1
     sim_threads: int | None = None
 
@@ -365,20 +374,22 @@ def _learn_policy(
         raise
     curve = out_dir / CURVE_JSONL
     lines = _truncate_curve(curve, model.num_timesteps)
-    checks = (
-        EarlyStop(task, config.stop, lines, scene_kwargs, config.reward)
-        if config.early_stop and not config.adr
-        else None
-    )
+    checked = config.early_stop and not config.adr
+    kept = KeptPolicy(out_dir) if checked and config.keep_best else None
+    checks = EarlyStop(task, config.stop, lines, scene_kwargs, config.reward, kept) if checked else None
     callbacks: list[BaseCallback] = [] if checks is None else [checks]  # before the curve: its line holds the check
     callbacks.append(_Curve(curve, config.timesteps, on_record, progress, checks))
     if config.adr:  # after the curve: a line holds the bounds its episodes were drawn in
         callbacks.append(AdrCallback(env, config.adr_every))
     learnt = checks is not None and checks.stopped_at is not None  # a resumed run that had stopped
+    budget = model.num_timesteps if learnt else config.timesteps
     try:
-        train(model, model.num_timesteps if learnt else config.timesteps, out_dir, config.checkpoint_every, callbacks)
+        train(
+            model, budget, out_dir, config.checkpoint_every, callbacks, POLICY_ZIP if kept is None else CHECKPOINT_ZIP
+        )
     finally:
         env.close()  # ends the simulation's worker processes (multiprocessing's exit hook, if earlier)
+    policy = model if kept is None else kept.install(out_dir / POLICY_ZIP, out_dir / CHECKPOINT_ZIP)
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
     simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
@@ -399,10 +410,12 @@ def _learn_policy(
     }
     if checks is not None:
         record["early_stop"] = {"stopped_at_ppo_env_steps": checks.stopped_at, "rule": asdict(config.stop)}
+    if kept is not None:  # None: no check was made, the last update's policy
+        record["kept_policy"] = kept.record
     if env.adr is not None:
         record["adr"] = env.adr.record(config.adr_every)
     save_json(out_dir / LEARNING_JSON, record)
-    return LearningOutcome(model, out_dir, record)
+    return LearningOutcome(policy, out_dir, record)
 
 
 def _clone(
