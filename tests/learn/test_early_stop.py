@@ -11,7 +11,9 @@ import pytest
 import torch
 
 from toolimit.errors import InvalidLearningConfig
-from toolimit.learn.early_stop import CHECK_GOAL, CHECK_SUCCESS, CHECK_TRAINING, EarlyStop, StopRule
+from toolimit.learn.early_stop import CHECK_GOAL, CHECK_SEED, CHECK_SUCCESS, CHECK_TRAINING, EarlyStop, StopRule
+from toolimit.learn.evaluate import EVALUATION_SEED
+from toolimit.learn.kept_policy import SELECTION_SEED
 from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
 
 #: A clone good enough to succeed from the first update on the shipped planar spade.
@@ -136,16 +138,33 @@ class _ScriptedChecks:
         return Outcome()
 
 
+class _ScriptedSelection:
+    """Stands in for the final choice's rollouts: (best check's, last update's) success rates, one
+    pair per run end, in order."""
+
+    def __init__(self, pairs):
+        self.rates = [rate for pair in pairs for rate in pair]
+
+    def __call__(self, model, task, episodes, scene_kwargs):
+        rate = self.rates.pop(0)
+        return {"success_rate": rate, "goal_reward_mean": 10.0 * rate}
+
+
 def test_the_run_keeps_its_best_checked_policy_and_continues_from_its_last(spade_task, tmp_path, monkeypatch):
     """Checks of 0.5, 1.0, 0.25, 1.0, 0.0: the policy of the 4th (the best, latest among equals) is
-    the run's; the last update's stays the checkpoint a larger budget continues from."""
+    the run's when it does better than the last update's on the selection episodes; the last
+    update's stays the checkpoint a larger budget continues from."""
     per_update = spade_task.horizon * 2
     never = StopRule(every=1, episodes=2, training_success=0.0, held=9)
     monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([0.5, 1.0, 0.25, 1.0, 0.0]))
+    monkeypatch.setattr("toolimit.learn.kept_policy.selection_outcome", _ScriptedSelection([(0.9, 0.6)]))
     config = _config(timesteps=6 * per_update, clone_steps=20, stop=never)
     outcome = learn_policy(spade_task, tmp_path / "run", config, progress=False)
     kept = outcome.record["kept_policy"]
-    assert kept["env_steps"] == 4 * per_update and kept["success_rate"] == 1.0
+    assert kept["policy"] == "best_check" and kept["env_steps"] == 4 * per_update
+    assert kept["best_check"]["success_rate"] == 1.0
+    assert kept["selection"]["best_check"]["success_rate"] == 0.9
+    assert kept["selection"]["last_update"]["success_rate"] == 0.6
     assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{4 * per_update}.zip"}
     # the kept policy is the 4th update's, as a run of four updates without checks has it
     four = learn_policy(spade_task, tmp_path / "four", _config(**{**config.__dict__, "timesteps": 4 * per_update,
@@ -157,6 +176,7 @@ def test_the_run_keeps_its_best_checked_policy_and_continues_from_its_last(spade
     # a larger budget continues from the last update, not from the kept policy; a later check at
     # the kept one's success (checks after updates 6 and 7: 0.0, 1.0) takes its place
     monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([0.0, 1.0]))
+    monkeypatch.setattr("toolimit.learn.kept_policy.selection_outcome", _ScriptedSelection([(0.9, 0.6)]))
     longer = learn_policy(spade_task, tmp_path / "run", _config(**{**config.__dict__, "timesteps": 8 * per_update}),
                           progress=False)
     assert longer.record["resumed"] and longer.record["ppo_env_steps"] == 8 * per_update
@@ -165,6 +185,39 @@ def test_the_run_keeps_its_best_checked_policy_and_continues_from_its_last(spade
                                                                      "early_stop": False}), progress=False)
     np.testing.assert_allclose(_parameters(longer.model), _parameters(seven.model), rtol=0, atol=1e-6)
     assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{7 * per_update}.zip"}
+
+
+@pytest.mark.parametrize("selection", [(0.6, 0.9), (0.75, 0.75)], ids=["last-does-better", "equal"])
+def test_a_best_check_that_does_no_better_on_the_selection_episodes_gives_way_to_the_last_update(
+    spade_task, tmp_path, monkeypatch, selection
+):
+    per_update = spade_task.horizon * 2
+    monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([1.0, 0.5, 0.5]))
+    monkeypatch.setattr("toolimit.learn.kept_policy.selection_outcome", _ScriptedSelection([selection]))
+    config = _config(timesteps=3 * per_update, clone_steps=20, stop=StopRule(every=1, episodes=2, held=9))
+    outcome = learn_policy(spade_task, tmp_path / "run", config, progress=False)
+    kept = outcome.record["kept_policy"]
+    assert kept["policy"] == "last_update" and kept["env_steps"] == 3 * per_update
+    assert kept["best_check"]["env_steps"] == per_update, "the best check stays on record"
+    last = learn_policy(spade_task, tmp_path / "last", _config(**{**config.__dict__, "early_stop": False}),
+                        progress=False)
+    np.testing.assert_allclose(_parameters(outcome.model), _parameters(last.model), rtol=0, atol=1e-6)
+
+
+def test_the_selection_rolls_both_candidates_out_and_keeps_the_better(spade_task, tmp_path, monkeypatch):
+    """The real selection (checks scripted so that the best is the first update's): each candidate
+    rolled out on the selection episodes, the record's choice the one that did better."""
+    per_update = spade_task.horizon * 2
+    monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([1.0, 0.0, 0.0]))
+    config = _config(timesteps=3 * per_update, clone_steps=20, selection_episodes=3,
+                     stop=StopRule(every=1, episodes=2, held=9))
+    kept = learn_policy(spade_task, tmp_path, config, progress=False).record["kept_policy"]
+    selection = kept["selection"]
+    assert selection["episodes"] == 3 and selection["seed"] == SELECTION_SEED
+    ranked = {name: (selection[name]["success_rate"], selection[name]["goal_reward_mean"])
+              for name in ("best_check", "last_update")}
+    assert kept["policy"] == ("best_check" if ranked["best_check"] > ranked["last_update"] else "last_update")
+    assert SELECTION_SEED not in {EVALUATION_SEED} | {CHECK_SEED + update for update in range(10**5)}
 
 
 def test_without_keep_best_the_run_is_its_last_update(spade_task, tmp_path, monkeypatch):

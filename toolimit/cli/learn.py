@@ -49,6 +49,7 @@ LEARNING_FLAGS = (
     Flag("stop.every", name="--stop-every"),
     Flag("stop.episodes", name="--stop-episodes"),
     Flag("keep_best"),
+    Flag("selection_episodes"),
     Flag("sim_processes"),
     Flag(
         "sim_threads", show=lambda threads: "the cores, shared among the processes" if threads is None else str(threads)

@@ -7,7 +7,8 @@ then names ``policy.zip``, the one copy of the final model), ``best.json`` and `
 (the best check's model, :mod:`toolimit.learn.kept_policy`), ``curve.jsonl`` (one line per
 update: env steps, mean return, success rate, goal reward, standard deviation, KL; under ADR the
 goal box bounds ``adr_low``, ``adr_high`` the update's episodes were drawn in), ``policy.zip``
-(the run's policy, an SB3 model: the best check's with ``keep_best``) and ``learning.json`` (settings,
+(the run's policy, an SB3 model: with ``keep_best`` the best check's or the last update's,
+the better on episodes of their own) and ``learning.json`` (settings,
 env steps, wall time split between simulation and learning; under ADR the final bounds and every
 boundary test, :meth:`toolimit.learn.adr.AdrState.record`). Run again on the same folder, it
 resumes from the last checkpoint; a finished run returns at once.
@@ -102,8 +103,11 @@ class LearningConfig:
             fixed budget when off); never under ADR.
         stop: the early-stopping rule (checks every few updates, success to hold).
         keep_best: the run's policy is the one of its best check (:mod:`toolimit.learn.kept_policy`:
-            the highest success, the latest among equals), not the last update's; with
-            ``early_stop`` only (its checks).
+            the highest success, the latest among equals) when it does better than the last
+            update's on ``selection_episodes`` episodes of their own; with ``early_stop`` only (its
+            checks).
+        selection_episodes: deterministic episodes on which each of the two candidates of
+            ``keep_best`` is rolled out at the end of a run whose best check is not its last update.
         sim_processes: processes stepping the B instances (3D tasks; the same numbers whatever
             their count, :mod:`toolimit.learn.split_simulator`). One by default: two were slower
             on the Panda spade while other jobs kept the second core busy (5,294 against 5,853
@@ -134,6 +138,7 @@ class LearningConfig:
     early_stop: bool = True
     stop: StopRule = StopRule()
     keep_best: bool = True
+    selection_episodes: int = 200
     sim_processes: int = 1
     sim_threads: int | None = None
 
@@ -150,6 +155,7 @@ class LearningConfig:
             ("seed", 0),
             ("torch_threads", 1),
             ("adr_every", 1),
+            ("selection_episodes", 1),
         ):
             value = getattr(self, field)
             if not isinstance(value, numbers.Integral) or value < lowest:
@@ -375,7 +381,7 @@ def _learn_policy(
     curve = out_dir / CURVE_JSONL
     lines = _truncate_curve(curve, model.num_timesteps)
     checked = config.early_stop and not config.adr
-    kept = KeptPolicy(out_dir) if checked and config.keep_best else None
+    kept = KeptPolicy(out_dir, task, config.selection_episodes, scene_kwargs) if checked and config.keep_best else None
     checks = EarlyStop(task, config.stop, lines, scene_kwargs, config.reward, kept) if checked else None
     callbacks: list[BaseCallback] = [] if checks is None else [checks]  # before the curve: its line holds the check
     callbacks.append(_Curve(curve, config.timesteps, on_record, progress, checks))
@@ -389,7 +395,9 @@ def _learn_policy(
         )
     finally:
         env.close()  # ends the simulation's worker processes (multiprocessing's exit hook, if earlier)
-    policy = model if kept is None else kept.install(out_dir / POLICY_ZIP, out_dir / CHECKPOINT_ZIP)
+    policy, choice = (
+        (model, None) if kept is None else kept.install(out_dir / POLICY_ZIP, model, out_dir / CHECKPOINT_ZIP)
+    )
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
     simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
@@ -410,8 +418,8 @@ def _learn_policy(
     }
     if checks is not None:
         record["early_stop"] = {"stopped_at_ppo_env_steps": checks.stopped_at, "rule": asdict(config.stop)}
-    if kept is not None:  # None: no check was made, the last update's policy
-        record["kept_policy"] = kept.record
+    if choice is not None:
+        record["kept_policy"] = choice
     if env.adr is not None:
         record["adr"] = env.adr.record(config.adr_every)
     save_json(out_dir / LEARNING_JSON, record)
