@@ -91,16 +91,16 @@ class KeptPolicy:
             (self.directory / previous["model"]).unlink(missing_ok=True)
         return True
 
-    def install(self, policy_file: Path, last_model: BaseAlgorithm, last_file: Path) -> tuple[PPO, dict[str, Any]]:
-        """Copy the run's policy to ``policy_file`` and load it: the best check's or the last
-        update's (``last_model``, saved as ``last_file``), chosen as the module docstring says; the
-        last update's when no check was made (a budget shorter than the checks' interval). Returns
-        it with the choice's record for ``learning.json``: ``policy`` (``best_check`` or
+    def install(self, policy_file: Path, last_model: PPO, last_file: Path) -> tuple[PPO, dict[str, Any]]:
+        """Copy the run's policy to ``policy_file``: the best check's or the last update's
+        (``last_model``, saved as ``last_file``), chosen as the module docstring says; the last
+        update's when no check was made (a budget shorter than the checks' interval). Returns its
+        model with the choice's record for ``learning.json``: ``policy`` (``best_check`` or
         ``last_update``), its ``env_steps``, the ``best_check`` and, when the two were rolled out,
         ``selection`` (each one's outcome, the episodes and their seed)."""
         last_steps = int(last_model.num_timesteps)
         choice: dict[str, Any] = {"policy": "last_update", "env_steps": last_steps, "best_check": self.record}
-        source = last_file
+        policy, source = last_model, last_file
         if self.record is not None:
             best_file = self.directory / self.record["model"]
             best_wins = self.record["env_steps"] == last_steps  # the same policy: nothing to choose
@@ -113,9 +113,10 @@ class KeptPolicy:
                 ranked = {name: (o["success_rate"], o["goal_reward_mean"]) for name, o in outcomes.items()}
                 best_wins = ranked["best_check"] > ranked["last_update"]
                 choice["selection"] = outcomes | {"episodes": self.episodes, "seed": SELECTION_SEED}
+                policy = best_model if best_wins else last_model
             if best_wins:
                 choice |= {"policy": "best_check", "env_steps": int(self.record["env_steps"])}
                 source = best_file
         with atomic_path(policy_file) as tmp:
             shutil.copyfile(source, tmp)
-        return PPO.load(policy_file, device="cpu"), choice
+        return policy, choice
