@@ -30,7 +30,7 @@ from toolimit.learn.env import ToolUseEnv
 from toolimit.robots import ROBOTS, ArmDescription, make_robot, register_robot
 from toolimit.robots import registry as robot_registry
 from toolimit.scenes import available_scenes, make_scene
-from toolimit.scenes.base import InvalidSceneParameters, SceneBase, world_position
+from toolimit.scenes.base import SceneBase, check_reset, instance_positions, world_position
 from toolimit.tools import ToolPose, ToolRecord, ToolSpec, register_tool, tool_record, tool_records
 from toolimit.tools import registry as tool_registry
 from toolimit.trajopt import SqpOptions, TrackOptions, targets_from_alignment, track
@@ -58,11 +58,8 @@ class ToyTouchScene(SceneBase):
         self.parameters = (world_position("target", "the point to touch", axes=(0, 2)),)
 
     def reset(self, params, rng: np.random.Generator, batch_size: int = 1) -> None:
-        reason = self.invalid_reason(params)
-        if reason:
-            raise InvalidSceneParameters(reason)
-        self.target = np.asarray(params["target"], dtype=float)
-        self.batch_size = batch_size
+        self.batch_size = check_reset(self, params, batch_size)
+        self.target = instance_positions(params, "target", batch_size)  # (B, 3): the learner's noise per instance
         self.touched = np.zeros(batch_size, bool)
         self.head = np.zeros((batch_size, 3))
 
@@ -85,7 +82,7 @@ class ToyTouchScene(SceneBase):
         return np.array([[target[0], 0.0, 0.02, 10.0, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
-        return {"target": self.target.copy()}
+        return {"target": self.target[0].copy()}
 
 
 def toy_knots(rng: np.random.Generator, fps: float) -> KnotMotion:

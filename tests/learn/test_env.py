@@ -10,7 +10,9 @@ from gymnasium.utils.env_checker import check_env
 import toolimit.learn  # noqa: F401  (registers the ids)
 from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, ToolUseEnv, env_id
 from toolimit.learn.shipped import environments
-from toolimit.learn.simulator import velocity_penalty
+import toolimit.learn.simulator as simulator_module
+from toolimit.learn import TaskSimulator, shipped_task
+from toolimit.learn.simulator import PARAM_NOISE_STD, velocity_penalty
 
 IDS = [env_id(tool, world) for tool, world in environments()]
 
@@ -112,3 +114,50 @@ def test_dense_reward_adds_the_scenes_shaping_to_the_goal_reward(spade_task):
 def test_an_unknown_reward_is_refused(spade_task):
     with pytest.raises(ValueError, match="unknown reward 'shaped'; choose one of sparse, dense"):
         ToolUseEnv("spade", "planar", task=spade_task, reward="shaped")
+
+
+
+SCENE_POSITIONS = {  # tool, world: the scene's state holding each instance's position parameters, m
+    ("spade", "planar"): lambda scene: np.column_stack([scene.sand_x, scene.goal_x]),
+    ("spade", "3d"): lambda scene: np.column_stack([scene.sand_position[:, :2], scene.goal_position[:, :2]]),
+    ("hammer", "3d"): lambda scene: scene._nail_xy,
+    ("scythe", "3d"): lambda scene: scene.grass_position[:, :2],
+    ("scythe", "planar"): lambda scene: scene.grass_centre,
+}
+
+
+def scene_offsets(simulator: TaskSimulator) -> np.ndarray:
+    """(B, K) each instance's scene positions minus the task's exact ones, m."""
+    tool, world = simulator.task.tool, simulator.task.world
+    exact = simulator.copy(batch_size=1).scene
+    exact.reset(simulator.task.params, np.random.default_rng(0), 1)
+    return SCENE_POSITIONS[tool, world](simulator.scene) - SCENE_POSITIONS[tool, world](exact)
+
+
+@pytest.mark.parametrize(("tool", "world"), SCENE_POSITIONS, ids=[f"{tool}-{world}" for tool, world in SCENE_POSITIONS])
+def test_reset_noise_moves_every_instance_s_positions_by_its_own_draw(tool, world):
+    """Each instance's scene positions take their own N(0, 1 cm) draw (the authors' environments
+    each drew their own): 16 instances, all offsets within 5 standard deviations, all different
+    but those of the instances whose draw was invalid (exact positions: the planar spade's deposit
+    stands 5 mm from the box's clearance, so about 40 % of its draws push it in)."""
+    scene_kwargs = {"n_spheres": 20} if (tool, world) == ("spade", "3d") else None
+    simulator = TaskSimulator(shipped_task(tool, world), batch_size=16, scene_kwargs=scene_kwargs)
+    simulator.reset(np.random.default_rng(3))
+    offsets = scene_offsets(simulator)
+    assert np.all(np.abs(offsets) < 5 * PARAM_NOISE_STD)
+    moved = offsets[np.any(offsets != 0.0, axis=1)]
+    assert len(np.unique(moved.round(9), axis=0)) == len(moved) >= 8
+
+
+def test_an_instance_whose_noise_makes_its_scene_invalid_keeps_the_exact_positions(spade_task, monkeypatch):
+    """With 0.3 m noise some deposits run into their boxes: those instances, and only they, keep
+    the task's positions."""
+    monkeypatch.setattr(simulator_module, "PARAM_NOISE_STD", 0.3)
+    simulator = TaskSimulator(spade_task, batch_size=32)
+    simulator.reset(np.random.default_rng(0))
+    exact = np.all(scene_offsets(simulator) == 0.0, axis=1)
+    assert 0 < exact.sum() < 32
+    scene, params = simulator.scene, dict(spade_task.params)
+    for sand_x, goal_x, kept in zip(scene.sand_x, scene.goal_x, exact):
+        moved = params | {"sand_position": np.array([sand_x, 0.0, 0.0]), "goal_position": np.array([goal_x, 0.0, 0.0])}
+        assert kept or scene.invalid_reason(moved) is None

@@ -11,7 +11,7 @@ import torch
 
 from toolimit.errors import InputError, InvalidLearningConfig
 from toolimit.learn import BatchedTaskVecEnv, shipped_task, training
-from toolimit.learn.evaluate import evaluate, evaluate_each_draw
+from toolimit.learn.evaluate import evaluate
 from toolimit.learn.ppo import PRESETS, make_ppo
 from toolimit.learn.training import CLONE_CHECK_EPISODES, CURVE_JSONL, LearningConfig, learn_policy, load_policy
 
@@ -113,22 +113,6 @@ def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path)
     assert result.successes.dtype == bool and result.goal_rewards.shape == (3,)
     record = result.record()
     assert record["episodes"] == 3 and 0.0 <= record["success_rate"] <= 1.0
-
-
-def test_an_evaluation_of_each_draw_rolls_each_episode_out_from_its_own_reset(spade_task):
-    """Episode k is the k-th reset of one generator (a batch of one each, so each its own draw of
-    the scene's noise): the first is a one-episode evaluation from the same seed, and the whole
-    repeats with the seed."""
-    model = make_ppo(BatchedTaskVecEnv(spade_task, 2, seed=0), PRESETS["toolimit"], seed=0)
-    each = evaluate_each_draw(model, spade_task, 3, deterministic=True, seed=7)
-    assert each.joint_positions.shape == (3, spade_task.horizon + 1, 3) and each.record()["episodes"] == 3
-    first = evaluate(model, spade_task, episodes=1, deterministic=True, seed=7)
-    np.testing.assert_array_equal(each.joint_positions[:1], first.joint_positions)
-    again = evaluate_each_draw(model, spade_task, 3, deterministic=True, seed=7)
-    np.testing.assert_array_equal(each.joint_positions, again.joint_positions)
-    assert not np.array_equal(each.joint_positions[0, 0], each.joint_positions[1, 0]), "a new reset each"
-    with pytest.raises(InputError, match="^episodes must be >= 1, got 0$"):
-        evaluate_each_draw(model, spade_task, 0)
 
 
 def test_evaluation_refuses_zero_episodes(spade_task):

@@ -152,3 +152,14 @@ def test_footprints_and_snapshot():
     assert snapshot["board"][1, 2] == pytest.approx(NAIL[2] - scene.protrusion)
     scene.step(ToolPose(np.array([0.5, 0.0, 0.6]), np.eye(3)))
     assert scene.snapshot()["hammer_head"].shape == (8, 3)
+
+
+def test_per_instance_nail_positions_put_each_nail_where_its_own_strike_lands():
+    """Instance 1's nail stands 0.5 m further along x: the strike over each nail plants that one."""
+    scene = PlanarHammerScene()
+    nails = np.stack([NAIL, NAIL + np.array([0.5, 0.0, 0.0])])
+    for instance, dx in enumerate((0.0, 0.5)):
+        scene.reset({"nail_position": nails}, np.random.default_rng(0), batch_size=2)
+        for position, rotation in zip(*strike(3.0, 0.06, dx=dx)):
+            scene.step(ToolPose(position, rotation))
+        np.testing.assert_array_equal(scene.goal_reward(), [instance == 0, instance == 1])

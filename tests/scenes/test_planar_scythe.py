@@ -117,3 +117,18 @@ def test_footprints_and_snapshot():
     assert snapshot["stalks"].shape == (scene.stalk_count, 3) and not snapshot["cut"].any()
     scene.step(ToolPose(np.array([0.0, 0.0, 0.05]), LEVEL))
     np.testing.assert_allclose(scene.snapshot()["blade"], [[0.02, -0.02, 0.05], [0.37, -0.02, 0.05]], atol=1e-12)
+
+
+def test_per_instance_patches_put_each_instance_s_stalks_in_its_own_patch():
+    """Instance 1's patch stands 1 m further along x: its stalks are there, the pull across
+    instance 0's patch cuts only instance 0's, and the dense term measures each from its own patch."""
+    scene = PlanarScytheScene()
+    patches = np.stack([GRASS, GRASS + np.array([1.0, 0.0, 0.0])])
+    scene.reset({"grass_position": patches}, np.random.default_rng(0), batch_size=2)
+    half = np.array(scene.patch_size) / 2
+    assert np.all(np.abs(scene.stalks - patches[:, None, :2]) <= half)
+    for position, rotation in zip(*pulled(1.3, 0.05)):
+        scene.step(ToolPose(position, rotation))
+    assert scene.goal_reward()[0] > 0 and scene.goal_reward()[1] == 0
+    dense = scene.dense_reward()
+    assert dense[0] > dense[1] > 0.0

@@ -54,3 +54,18 @@ def test_a_scene_without_a_scripted_motion_is_a_one_line_error():
         NoScriptedMotion, match=r"no scripted motion for the hammer in world 'planar'; scripted: .*spade/planar"
     ):
         scripted_motion("hammer", "planar", {})
+
+
+@pytest.mark.parametrize(("tool", "world", "params", "goal"), CASES[:3] + CASES[4:], ids=lambda case: str(case)[:20])
+def test_per_instance_positions_place_each_instance_where_its_own_motion_succeeds(tool, world, params, goal):
+    """Instance 1's elements all stand 1 m further along x: the motion scripted for instance 0's
+    positions succeeds there only, and the motion scripted for instance 1's there only."""
+    shift = np.array([1.0, 0.0, 0.0])
+    moved = {name: value + shift if np.ndim(value) == 1 else value for name, value in params.items()}
+    per_instance = {name: np.stack([value, moved[name]]) if np.ndim(value) == 1 else value for name, value in params.items()}
+    scene = make_scene(tool, world)
+    for instance, own in enumerate((params, moved)):
+        motion = hold_last(scripted_motion(tool, world, own), len(scripted_motion(tool, world, own).position))
+        rewards = replay(scene, per_instance, np.random.default_rng(0), motion, batch_size=2, tool_alone=False)
+        assert rewards[instance] >= goal and rewards[1 - instance] < goal, rewards
+        assert scene.is_success().tolist() == [instance == 0, instance == 1]

@@ -44,9 +44,9 @@ def assert_static_surfaces_win(scene: SpatialSpadeScene, step: int) -> None:
     """No centre below r - 1 mm; no centre within r - 1 mm of a wall box (all instances)."""
     positions = scene.sphere_positions
     assert positions[..., 2].min() >= R - TOLERANCE, f"a sphere is {R - positions[..., 2].min():.4f} m into the ground at step {step}"
-    walls = scene.walls
-    local = np.einsum("bnkj,kja->bnka", positions[:, :, None] - walls.centers, walls.rotations)
-    outside = np.maximum(np.abs(local) - walls.half_extents, 0.0)
+    walls = scene.walls  # (B, K, ...): each instance's walls
+    local = np.einsum("bnkj,bkja->bnka", positions[:, :, None] - walls.centers[:, None], walls.rotations)
+    outside = np.maximum(np.abs(local) - walls.half_extents[:, None], 0.0)
     distance = np.linalg.norm(outside, axis=-1)
     assert distance.min() >= R - TOLERANCE, f"a sphere is {R - distance.min():.4f} m into a wall at step {step}"
     assert np.all(scene.static_penetration() <= TOLERANCE)

@@ -70,7 +70,7 @@ import numpy as np
 from toolimit.errors import InputError
 from toolimit.scenes.base import ParameterSpec, Scene
 
-#: The scene parameter ADR moves: the spades' goal box (a ``per_instance`` position).
+#: The scene parameter ADR moves, per instance: the spades' goal box.
 GOAL_BOX = "goal_position"
 #: Half sizes (m, world x and y) of the paper's 100 x 90 cm range around the aligned position.
 HALF_RANGE = np.array([0.5, 0.45])
@@ -96,7 +96,7 @@ RULE_VERSION = 2
 def goal_box_spec(scene: Scene) -> ParameterSpec:
     """The goal box's parameter spec of ``scene``; InputError for a tool without a goal box."""
     for spec in scene.parameters:
-        if spec.name == GOAL_BOX and spec.per_instance:
+        if spec.name == GOAL_BOX and spec.kind == "position":
             return spec
     raise InputError(f"--adr randomises the goal box position, and the {scene.tool} scene has none (only the spades)")
 
@@ -147,18 +147,18 @@ class AdrBounds:
         return float(np.clip(value, inner, outer))
 
     def draw(
-        self, rng: np.random.Generator, count: int, valid: Callable[[np.ndarray], bool] = lambda _: True
+        self, rng: np.random.Generator, count: int, valid: Callable[[int, np.ndarray], bool] = lambda *_: True
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(count, 2) positions uniform inside the bounds, each redrawn while ``valid`` says no (at
-        most REDRAWS times, then the aligned position), m, and (count,) whether each was placed
-        inside the bounds (False: it fell back to the aligned position). Draws the same numbers
-        whatever ``valid`` says about other instances."""
+        """(count, 2) positions uniform inside the bounds, each redrawn while ``valid(i, position)``
+        says no for instance i (at most REDRAWS times, then the aligned position), m, and (count,)
+        whether each was placed inside the bounds (False: it fell back to the aligned position).
+        Draws the same numbers for an instance whatever ``valid`` says about later ones."""
         positions = np.empty((count, 2))
         placed = np.ones(count, dtype=bool)
         for i in range(count):
             for _ in range(REDRAWS):
                 positions[i] = rng.uniform(self.low, self.high)
-                if valid(positions[i]):
+                if valid(i, positions[i]):
                     break
             else:
                 positions[i], placed[i] = self.aligned, False

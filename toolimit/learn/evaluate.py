@@ -1,7 +1,8 @@
 """Evaluation of a policy: rollouts over many seeds, goal reward and the paper's success rate.
 
 Deterministic rollouts act with the policy's mean; stochastic ones sample its Gaussian (how PPO
-explores). All episodes of one evaluation run at once in one batched scene. A policy learned with
+explores). All episodes of one evaluation run at once in one batched scene, each instance with its
+own draw of the reset noise (:mod:`toolimit.learn.simulator`). A policy learned with
 ADR (its observation holds the goal box, :mod:`toolimit.learn.adr`) is evaluated with the box at
 the aligned position; :mod:`toolimit.learn.heat_map` moves it over a grid.
 """
@@ -69,33 +70,6 @@ def evaluate(
         raise InputError(f"episodes must be >= 1, got {episodes!r}")
     env = BatchedTaskVecEnv(task, episodes, seed=seed, scene_kwargs=scene_kwargs, adr=observes_goal_box(model, task))
     return rollout(model, env, deterministic)
-
-
-def evaluate_each_draw(
-    model: BaseAlgorithm,
-    task: LearningTask,
-    episodes: int,
-    deterministic: bool = True,
-    seed: int = EVALUATION_SEED,
-    scene_kwargs: dict[str, Any] | None = None,
-) -> Evaluation:
-    """As :func:`evaluate`, but each episode a batch of its own, so each draws its own reset noise.
-
-    The reset moves the scene's positions by one noise draw per batch (:mod:`toolimit.learn.simulator`),
-    so :func:`evaluate`'s episodes share one draw, and its success rate moves with it (0.40 to 0.60
-    over five seeds for dense PPO on the figure's ``spade_02``, 0.36 over 100 draws;
-    benchmarks/evaluation_noise.py). Slower: one instance stepped at a time."""
-    if episodes < 1:
-        raise InputError(f"episodes must be >= 1, got {episodes!r}")
-    env = BatchedTaskVecEnv(task, 1, seed=seed, scene_kwargs=scene_kwargs, adr=observes_goal_box(model, task))
-    parts = [rollout(model, env, deterministic) for _ in range(episodes)]
-    return Evaluation(
-        deterministic,
-        np.concatenate([part.goal_rewards for part in parts]),
-        np.concatenate([part.successes for part in parts]),
-        np.concatenate([part.returns for part in parts]),
-        np.concatenate([part.joint_positions for part in parts]),
-    )
 
 
 def rollout(model: BaseAlgorithm, env: BatchedTaskVecEnv, deterministic: bool = True) -> Evaluation:

@@ -18,9 +18,7 @@ The best of a long run's thousands of 20-episode checks flatters its policy: on 
 best check (0.90, at 13.58 M steps) was of a policy that succeeded in 8 of 20 evaluation episodes,
 where the last update's succeeded in 14. So at the end of a run whose best check is not its last
 update, both policies are rolled out on ``episodes`` deterministic episodes of their own
-(:data:`SELECTION_SEED`), each drawing its own reset noise (a check's episodes share one draw,
-:func:`~toolimit.learn.evaluate.evaluate_each_draw`), and the best check's is kept only when it
-does better there (success, then goal reward); the last update's otherwise. Two candidates judged
+(:data:`SELECTION_SEED`), and the best check's is kept only when it does better there (success, then goal reward); the last update's otherwise. Two candidates judged
 on 200 fresh episodes leave little to flatter, and the final evaluation's episodes still chose
 nothing.
 """
@@ -36,7 +34,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.artifacts import atomic_path, save_json
-from toolimit.learn.evaluate import evaluate_each_draw
+from toolimit.learn.evaluate import evaluate
 from toolimit.learn.task import LearningTask
 
 #: The record of the kept check: its PPO steps, its outcome and its model's file.
@@ -50,8 +48,8 @@ def selection_outcome(
     model: BaseAlgorithm, task: LearningTask, episodes: int, scene_kwargs: dict[str, Any] | None
 ) -> dict[str, float]:
     """``model``'s success rate and mean goal reward over ``episodes`` deterministic episodes of
-    ``task`` from :data:`SELECTION_SEED`, each with its own draw of the reset noise."""
-    outcome = evaluate_each_draw(model, task, episodes, True, SELECTION_SEED, scene_kwargs)
+    ``task`` from :data:`SELECTION_SEED`."""
+    outcome = evaluate(model, task, episodes, True, SELECTION_SEED, scene_kwargs)
     record = outcome.record()
     return {"success_rate": record["success_rate"], "goal_reward_mean": record["goal_reward_mean"]}
 

@@ -23,11 +23,12 @@ Reward per step (docs/original_setup.md#robot-environment): (goal reward + veloc
   dense-reward baseline) the scene's dense shaping (the appendix's, ``Scene.dense_reward``) is
   added to the goal reward: the shaping guides, the goal reward still counts what succeeds.
 Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each; every position
-  parameter of the scene + N(0, 0.01) m in x and y (one draw per batch: the scene takes one set of
-  parameters for its B instances); the scene's own randomness (sand jitter, ...).
+  parameter of the scene + N(0, 0.01) m in x and y, drawn for each instance (as each of the
+  authors' environments drew its own at its reset; an instance whose draw pushes one element into
+  another keeps the exact positions); the scene's own randomness (sand jitter, ...).
 Goal box (spades): under ADR each instance's box is drawn inside the current ADR bounds
   (:meth:`AdrBounds.draw <toolimit.learn.adr.AdrBounds.draw>`: uniform, one position per instance,
-  the scenes take a box per instance; redrawn where it would overlap the noisy deposit), without
+  the scenes take a box per instance; redrawn where it would overlap its instance's noisy deposit), without
   the N(0, 0.01) noise (a box that finds no valid position in 100 draws stands at the aligned one,
   and ``box_placed`` says so: ADR's boundary tests do not count its episode at the bound);
   ``reset(rng, box_positions)`` sets the positions instead (heat maps). The bounds start collapsed
@@ -46,6 +47,7 @@ from toolimit.learn.batch_part import BatchPart
 from toolimit.learn.task import LearningTask
 from toolimit.robots import make_robot
 from toolimit.rotations import quaternions_wxyz
+from toolimit.scenes.base import instance_params
 from toolimit.scenes.registry import make_scene
 from toolimit.tools import ToolPose
 
@@ -151,40 +153,55 @@ class TaskSimulator:
         part = self.part
         noise = rng.normal(0.0, JOINT_NOISE_STD, size=(part.total, self.n_joints))
         self.q = np.clip(self.task.reference_q[0] + part.of(noise), self.robot.lower, self.robot.upper)
-        params = self._noisy_params(rng, box_placed=box_positions is not None or self.adr_bounds is not None)
+        box_placed = box_positions is not None or self.adr_bounds is not None
+        params = self._noisy_params(rng, box_placed)
         placed = np.ones(part.total, dtype=bool)
-        if box_positions is not None and not all(map(self.box_validity(params), np.reshape(box_positions, (-1, 2)))):
-            params = dict(self.task.params)  # the deposit's noise made a given box position invalid
-        elif box_positions is None and self.adr_bounds is not None:
-            box_positions, placed = self.adr_bounds.draw(rng, part.total, self.box_validity(params))
+        if box_positions is not None:
+            box_positions = np.broadcast_to(np.asarray(box_positions, dtype=float), (part.total, 2))
+            for i, position in enumerate(box_positions):
+                if not self.box_validity(instance_params(params, i))(position):
+                    self._exact_instance(params, i)  # the deposit's noise made the given box invalid
+        elif self.adr_bounds is not None:
+            box_positions, placed = self.adr_bounds.draw(
+                rng, part.total, lambda i, position: self.box_validity(instance_params(params, i))(position)
+            )
         self.box_placed = part.of(placed).copy()
         if box_positions is not None:
-            whole = np.broadcast_to(np.asarray(box_positions, dtype=float), (part.total, 2))
-            self.box_positions = part.of(whole).copy()
-            params[GOAL_BOX] = self._box_parameter(params)
-        self.scene.reset(params, part.generator(rng), self.batch_size)
+            self.box_positions = part.of(box_positions).copy()
+            params[GOAL_BOX][:, :2] = box_positions
+        part_params = {name: part.of(value) if np.ndim(value) == 2 else value for name, value in params.items()}
+        self.scene.reset(part_params, part.generator(rng), self.batch_size)
         self.t = 0
         self._update_tool(first=True)
         return self.observation()
 
     def _noisy_params(self, rng: np.random.Generator, box_placed: bool) -> dict[str, Any]:
-        """The task's scene parameters with N(0, PARAM_NOISE_STD) m on each position's x and y;
-        the exact ones if the noise makes them invalid (an element pushed into another).
-        ``box_placed``: the goal box is placed afterwards (ADR, given positions), so it keeps the
-        aligned position here, which stays valid with the noisy others."""
+        """The task's scene parameters with every position (N, 3) per instance of the whole batch
+        (N = ``part.total``), each with its own N(0, PARAM_NOISE_STD) m on x and y; an instance
+        whose noise makes its scene invalid (an element pushed into another) keeps the exact
+        values. ``box_placed``: the goal box is placed afterwards (ADR, given positions), so it
+        keeps the aligned position here, which stays valid with the noisy others."""
+        total = self.part.total
         noisy: dict[str, Any] = {}
         for spec in self.scene.parameters:
             value = self.task.params[spec.name]
-            if spec.kind == "position" and not (box_placed and spec.name == GOAL_BOX):
-                value = np.asarray(value, dtype=float) + np.r_[rng.normal(0.0, PARAM_NOISE_STD, 2), 0.0]
+            if spec.kind == "position":
+                offsets = np.zeros((total, 3))
+                if not (box_placed and spec.name == GOAL_BOX):
+                    offsets[:, :2] = rng.normal(0.0, PARAM_NOISE_STD, size=(total, 2))
+                value = np.asarray(value, dtype=float) + offsets
             noisy[spec.name] = value
-        return noisy if self.scene.invalid_reason(noisy) is None else dict(self.task.params)
+        for i in range(total):
+            if self.scene.invalid_reason(instance_params(noisy, i)) is not None:
+                self._exact_instance(noisy, i)
+        return noisy
 
-    def _box_parameter(self, params: dict[str, Any]) -> np.ndarray:
-        """(B, 3) the goal box parameter with x, y from ``box_positions`` (z kept)."""
-        goal = np.repeat(np.asarray(params[GOAL_BOX], dtype=float)[None], self.batch_size, axis=0)
-        goal[:, :2] = self.box_positions
-        return goal
+    def _exact_instance(self, params: dict[str, Any], index: int) -> None:
+        """Give instance ``index`` of the whole batch the task's exact positions in ``params``
+        (per-instance (N, 3) arrays, changed in place)."""
+        for name, value in params.items():
+            if np.ndim(value) == 2:
+                value[index] = self.task.params[name]
 
     def box_validity(self, params: dict[str, Any]) -> Callable[[np.ndarray], bool]:
         """Whether a goal box at x, y (2,) m makes a valid scene with the other ``params``."""

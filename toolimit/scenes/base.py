@@ -7,8 +7,9 @@ document (x-z vertical plane or x-y horizontal plane) and ignore the other coord
 
 Scenes are *batched*: ``reset(..., batch_size=B)`` creates B independent instances of the same
 parameters, each with its own randomness (sand jitter, grass placement), so the 10 replays of an
-alignment sample run as one call. Every per-instance quantity has the batch on axis 0; B = 1 is the
-ordinary case.
+alignment sample run as one call. A position parameter may also be given per instance, (B, 3) (the
+learner's reset noise, domain randomisation's goal boxes). Every per-instance quantity has the
+batch on axis 0; B = 1 is the ordinary case.
 """
 
 from __future__ import annotations
@@ -97,9 +98,10 @@ class ParameterSpec:
         axes: for ``"position"``: the coordinates (0 = x, 1 = y, 2 = z) the scene reads and checks
             against the bounds; a planar scene ignores the others.
         bound_reason: why the bounds are what they are, added to the message of a value outside them.
-        per_instance: for ``"position"``: ``reset`` also takes a (B, 3) array, one position per
-            instance (the spades' goal box, which domain randomisation moves per instance);
-            ``invalid_reason`` and ``footprints`` take one instance's (3,) value.
+
+    A ``"position"`` parameter's value is one (3,) point for every instance, or to ``reset`` a
+    (B, 3) array, one point per instance; ``invalid_reason`` and ``footprints`` take one
+    instance's (3,) value.
     """
 
     name: str
@@ -111,7 +113,6 @@ class ParameterSpec:
     description: str = ""
     axes: tuple[int, ...] = (0, 1, 2)
     bound_reason: str = ""
-    per_instance: bool = False
 
 
 def world_position(
@@ -121,11 +122,10 @@ def world_position(
     high_z: float = 0.0,
     axes: tuple[int, ...] = (0, 1, 2),
     bound_reason: str = "",
-    per_instance: bool = False,
 ) -> ParameterSpec:
     """A ``"position"`` spec (unit m) whose x and y may be anywhere in the world (within
     +-``WORLD_HALF_SIZE``) and whose z lies in [``low_z``, ``high_z``]; the default z = 0 is an
-    element standing on the ground (alignment then sets z = 0). ``per_instance``: see ParameterSpec."""
+    element standing on the ground (alignment then sets z = 0)."""
     return ParameterSpec(
         name,
         "position",
@@ -136,7 +136,6 @@ def world_position(
         description=description,
         axes=axes,
         bound_reason=bound_reason,
-        per_instance=per_instance,
     )
 
 
@@ -164,7 +163,7 @@ class Scene(Protocol):
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build B instances with these parameters; raises InvalidSceneParameters if invalid.
 
-        A ``per_instance`` position parameter (ParameterSpec) may be (B, 3): one per instance.
+        A position parameter may be (B, 3): one point per instance (ParameterSpec).
 
         The tool is absent until the first ``step``, which places it without velocity.
         """
@@ -307,7 +306,7 @@ def dense_spade_reward(
         grains: (B, N, D) sand grain (circle or sphere) centres.
         goal: (B, 1, D) the goal box's floor centre (on the ground).
         tool_point: (B, D) handle ends, None before the first step.
-        deposit: (D,) the deposit's floor centre.
+        deposit: (D,) or (B, D) the deposit's floor centre.
         All in the world frame (D = 3) or in the planar scene's plane (D = 2), m.
     """
     sand_term = gaussian_closeness(np.sum((grains - goal) ** 2, axis=-1)).mean(axis=1)
@@ -398,31 +397,36 @@ class WindowedGoalScene(SceneBase):
 def check_reset(scene: Scene, params: SceneParams, batch_size: int) -> int:
     """Validate a ``reset`` call before any work; returns B as an int.
 
-    A ``per_instance`` parameter given as (B, 3) is checked instance by instance (the message names
-    the instance). Raises InvalidSceneParameters with the scene's own reason, or ValueError for a
+    A position parameter given as (B, 3) is checked instance by instance (the message names the
+    instance). Raises InvalidSceneParameters with the scene's own reason, or ValueError for a
     batch size < 1 or a per-instance array that is not (B, 3).
     """
     if int(batch_size) < 1:
         raise ValueError(f"batch_size must be >= 1, got {batch_size!r}")
-    batched = {
+    batched = [
         spec.name
         for spec in scene.parameters
-        if spec.per_instance and spec.name in params and np.ndim(params[spec.name]) == 2
-    }
+        if spec.kind == "position" and spec.name in params and np.ndim(params[spec.name]) == 2
+    ]
     for name in batched:
         if np.shape(params[name]) != (batch_size, 3):
             raise ValueError(f"per-instance {name} must be ({batch_size}, 3), got {np.shape(params[name])}")
     for b in range(int(batch_size) if batched else 1):
-        instance = {name: np.asarray(value)[b] if name in batched else value for name, value in params.items()}
-        reason = scene.invalid_reason(instance)
+        reason = scene.invalid_reason(instance_params(params, b))
         if reason is not None:
             raise InvalidSceneParameters(f"instance {b}: {reason}" if batched else reason)
     return int(batch_size)
 
 
+def instance_params(params: SceneParams, index: int) -> dict[str, np.ndarray | float]:
+    """Instance ``index``'s parameters: row ``index`` of every per-instance (B, 3) position, the
+    other values as they are."""
+    return {name: np.asarray(value)[index] if np.ndim(value) == 2 else value for name, value in params.items()}
+
+
 def instance_positions(params: SceneParams, name: str, batch_size: int) -> np.ndarray:
     """(B, 3) the position parameter ``name`` of every instance: a (3,) value repeated, or the
-    (B, 3) per-instance values (a ``per_instance`` spec), world frame, m."""
+    (B, 3) per-instance values, world frame, m."""
     return np.broadcast_to(np.asarray(params[name], dtype=float), (batch_size, 3)).copy()
 
 

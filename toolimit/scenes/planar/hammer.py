@@ -43,6 +43,7 @@ from toolimit.scenes.base import (
     check_reset,
     dense_hammer_reward,
     dense_tool_point,
+    instance_positions,
     require_reset,
     world_position,
 )
@@ -117,7 +118,7 @@ class PlanarHammerScene(WindowedGoalScene):
             ),
         )
         # The state of the B instances, built by reset.
-        self.nail_start = np.zeros(2)  # plane point (x, z) of the nail head's top at reset, m
+        self.nail_start = np.zeros((0, 2))  # (B, 2) plane points (x, z) of the nail heads' tops at reset, m
         self._spaces: list[pymunk.Space] = []
         self._nails: list[pymunk.Body] = []
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
@@ -126,16 +127,16 @@ class PlanarHammerScene(WindowedGoalScene):
     # ----------------------------------------------------------------------------------- parameters
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """Build ``batch_size`` identical instances (this scene has no per-instance randomness)."""
+        """Build ``batch_size`` instances with the nail at ``params["nail_position"]`` ((3,) or (B, 3),
+        per instance; this scene has no randomness of its own)."""
         batch_size = check_reset(self, params, batch_size)
-        nail = np.asarray(params["nail_position"], dtype=float)
-        self.nail_start = np.array([nail[0], nail[2]])  # plane point of the head top, m
+        self.nail_start = instance_positions(params, "nail_position", batch_size)[:, [0, 2]]
         self._spaces, self._nails = [], []
-        for _ in range(batch_size):
+        for start in self.nail_start:
             space = pymunk.Space()
             space.gravity = (0.0, -9.81)
             space.collision_slop = 0.0002
-            self._nails.append(self._add_nail(space))
+            self._nails.append(self._add_nail(space, start))
             self._spaces.append(space)
         self._tool = KinematicTool(self._spaces, "xz", reference_axis=2)
         self._tool_shapes = []
@@ -147,10 +148,11 @@ class PlanarHammerScene(WindowedGoalScene):
             self._tool_shapes.append((head, handle))
         self.start_instances(batch_size)  # the clock starts with the first step
 
-    def _add_nail(self, space: pymunk.Space) -> pymunk.Body:
-        """The nail body with its guide and friction joints; body origin = head top, plane m."""
+    def _add_nail(self, space: pymunk.Space, start: np.ndarray) -> pymunk.Body:
+        """The nail body with its guide and friction joints, its head top at ``start`` (x, z) (the
+        body's origin), plane m."""
         body = pymunk.Body(self.nail_mass, float("inf"))
-        body.position = plane_point(self.nail_start)
+        body.position = plane_point(start)
         w, t = self.nail_head_width / 2.0, self.nail_head_thickness
         shank_bottom = -(t + self.protrusion + SHANK_EMBEDDED)
         s = self.nail_shank_width / 2.0
@@ -159,7 +161,7 @@ class PlanarHammerScene(WindowedGoalScene):
         for shape in (head, shank):
             shape.friction = 0.5
             shape.elasticity = 0.0
-        x, y = self.nail_start
+        x, y = start
         guide = pymunk.GrooveJoint(space.static_body, body, (x, y), (x, y - self.protrusion), (0.0, 0.0))
         friction = pymunk.PivotJoint(space.static_body, body, (x, y), (0.0, 0.0))
         friction.max_bias = 0.0
@@ -193,7 +195,7 @@ class PlanarHammerScene(WindowedGoalScene):
         """(B,) how far each nail has been driven down from its start, m, in [0, protrusion]."""
         require_reset(self)
         y = np.array([nail.position.y for nail in self._nails])
-        return np.clip(self.nail_start[1] - y, 0.0, self.protrusion)
+        return np.clip(self.nail_start[:, 1] - y, 0.0, self.protrusion)
 
     def goal_reward(self) -> np.ndarray:
         """(B,) 1 where less than ``planted_tolerance`` of the travel is left, else 0."""
@@ -204,8 +206,8 @@ class PlanarHammerScene(WindowedGoalScene):
         """(B,) the paper appendix's closeness of the hammer's striking face to the nail head's
         centre (module docstring), in [0, 1]; 0 before the first step."""
         require_reset(self)
-        centre = self.nail_start[1] - self.travel() - self.nail_head_thickness / 2.0
-        nail_head = np.stack([np.full(self.batch_size, self.nail_start[0]), centre], -1)
+        centre = self.nail_start[:, 1] - self.travel() - self.nail_head_thickness / 2.0
+        nail_head = np.stack([self.nail_start[:, 0], centre], -1)
         return dense_hammer_reward(self._tool.plane_point(dense_tool_point("hammer")), nail_head)
 
     # ----------------------------------------------------------------------------------- views
@@ -220,7 +222,7 @@ class PlanarHammerScene(WindowedGoalScene):
         board block's min and max corners (y = 0), ``hammer_head`` (8, 3) world corners (if placed)."""
         require_reset(self)
         travel = self.travel()[0]
-        x, z = self.nail_start
+        x, z = self.nail_start[0]
         board_top = z - self.protrusion
         snapshot = {
             "nail_top": np.array([x, 0.0, z - travel]),

@@ -33,6 +33,7 @@ from toolimit.scenes.base import (
     WindowedGoalScene,
     check_reset,
     dense_scythe_reward,
+    instance_positions,
     require_counts,
     require_positive,
     require_reset,
@@ -91,7 +92,7 @@ class PlanarScytheScene(WindowedGoalScene):
             ),
         )
         # The state of the B instances, built by reset.
-        self.grass_centre = np.zeros(2)  # patch centre, world x-y, m
+        self.grass_centre = np.zeros((0, 2))  # (B, 2) patch centres, world x-y, m
         self.stalks = np.zeros((0, self.stalk_count, 2))  # (B, M, 2) stalk positions, m
         self.cut = np.zeros((0, self.stalk_count), dtype=bool)  # (B, M)
         self._spaces: list[pymunk.Space] = []
@@ -100,11 +101,14 @@ class PlanarScytheScene(WindowedGoalScene):
     # ----------------------------------------------------------------------------------- parameters
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """Build ``batch_size`` instances, each with its own stalk placement drawn from ``rng``."""
+        """Build ``batch_size`` instances at ``params["grass_position"]`` ((3,) or (B, 3), per
+        instance), each with its own stalk placement drawn from ``rng``."""
         batch_size = check_reset(self, params, batch_size)
-        self.grass_centre = np.asarray(params["grass_position"], dtype=float)[:2].copy()
+        self.grass_centre = instance_positions(params, "grass_position", batch_size)[:, :2]
         half = np.array(self.patch_size) / 2.0
-        self.stalks = self.grass_centre + rng.uniform(-half, half, size=(batch_size, self.stalk_count, 2))  # (B, M, 2)
+        self.stalks = self.grass_centre[:, None] + rng.uniform(
+            -half, half, size=(batch_size, self.stalk_count, 2)
+        )  # (B, M, 2)
         self.cut = np.zeros((batch_size, self.stalk_count), dtype=bool)
         self._spaces = [pymunk.Space() for _ in range(batch_size)]
         self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
@@ -136,8 +140,7 @@ class PlanarScytheScene(WindowedGoalScene):
         """(B,) the paper appendix's closeness of the head point to the patch's centre (module
         docstring), in [0, 0.1]; 0 before the first step."""
         require_reset(self)
-        patch = np.broadcast_to(self.grass_centre, (self.batch_size, 2))
-        return dense_scythe_reward(self._tool.position if self._tool.placed else None, patch)
+        return dense_scythe_reward(self._tool.position if self._tool.placed else None, self.grass_centre)
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:

@@ -10,8 +10,8 @@ World (pymunk x = world x, pymunk y = world z; world y is ignored):
   ``sand_jitter``, upward only in z). With ``sleeping`` the pile starts asleep: it costs nothing
   until the tool touches it, and woken circles resolve their millimetre overlaps then;
 * the goal box: two walls ``goal_wall_height`` tall, inner width ``2 * goal_half_width``, centred
-  at parameter ``goal_position`` x (per instance if given as (B, 3): each instance has its own
-  pymunk space, so a box per instance costs nothing). It is a dynamic body (``goal_box_mass``, sliding on the ground
+  at parameter ``goal_position`` x (both positions may be (B, 3), one per instance: each instance
+  has its own pymunk space, so this costs nothing). It is a dynamic body (``goal_box_mass``, sliding on the ground
   with friction, no rotation), so the tool cannot carry or push sand through its walls: a spade that
   runs into it shoves the box. The deposit's walls are static (sand pushed out of the deposit earns
   nothing, and the deposit stays where alignment put it).
@@ -140,12 +140,10 @@ class PlanarSpadeScene(SceneBase):
         self._outline = spade_outline(spec.head_length, spec.length, lip_height)
         self.parameters = (
             world_position("sand_position", "centre of the sand deposit tray on the ground (x used)", axes=(0,)),
-            world_position(
-                "goal_position", "centre of the open goal box on the ground (x used)", axes=(0,), per_instance=True
-            ),
+            world_position("goal_position", "centre of the open goal box on the ground (x used)", axes=(0,)),
         )
         # The state of the B instances, built by reset.
-        self.sand_x = 0.0  # deposit centre, m
+        self.sand_x = np.zeros(0)  # (B,) deposit centres, m
         self.goal_x = np.zeros(0)  # (B,) goal box centres at reset, m
         self._spaces: list[pymunk.Space] = []
         self._sand_bodies: list[list[pymunk.Body]] = []
@@ -180,7 +178,7 @@ class PlanarSpadeScene(SceneBase):
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` instances; each jitters the settled pile with ``rng``."""
         batch_size = check_reset(self, params, batch_size)
-        self.sand_x = float(np.asarray(params["sand_position"], dtype=float)[0])
+        self.sand_x = instance_positions(params, "sand_position", batch_size)[:, 0]
         self.goal_x = instance_positions(params, "goal_position", batch_size)[:, 0]
         dt = self.control_dt / self.substeps
         pile = settled_pile(
@@ -193,13 +191,13 @@ class PlanarSpadeScene(SceneBase):
             self.solver_iterations,
         )
         self._spaces, self._sand_bodies, self._boxes = [], [], []
-        for goal_x in self.goal_x:
+        for sand_x, goal_x in zip(self.sand_x, self.goal_x):
             space = pymunk.Space()
             configure_space(space, self.solver_iterations, self.sleeping)
             add_ground(space, self.sand.friction)
             add_walls(
                 space,
-                self.sand_x,
+                sand_x,
                 self.deposit_half_width,
                 self.deposit_wall_height,
                 WALL_THICKNESS,
@@ -216,7 +214,7 @@ class PlanarSpadeScene(SceneBase):
             )
             jitter = rng.normal(0.0, self.sand_jitter, pile.shape)
             jitter[:, 1] = np.abs(jitter[:, 1])  # lift rather than push circles into the ground
-            positions = pile + jitter + np.array([self.sand_x, 0.0])
+            positions = pile + jitter + np.array([sand_x, 0.0])
             bodies = add_circles(space, positions, self.sand)
             if self.sleeping:
                 for body in [box, *bodies]:  # at rest until touched: the tool (or a woken body) wakes it
@@ -306,7 +304,8 @@ class PlanarSpadeScene(SceneBase):
         require_reset(self)
         goal = np.stack([self._box_x, np.zeros(self.batch_size)], -1)  # (B, 2) plane x-z, m
         tool = self._tool.plane_point(dense_tool_point("spade"))
-        return dense_spade_reward(self._sand, goal[:, None, :], tool, np.array([self.sand_x, 0.0]))
+        deposit = np.stack([self.sand_x, np.zeros(self.batch_size)], -1)  # (B, 2) plane x-z, m
+        return dense_spade_reward(self._sand, goal[:, None, :], tool, deposit)
 
     def is_success(self) -> np.ndarray:
         """(B,) >= success_count circles in the box for at least half of the steps since reset."""
@@ -335,7 +334,7 @@ class PlanarSpadeScene(SceneBase):
         sand[:, [0, 2]] = self._sand[0]
         walls = []
         for centre, half, height in (
-            (self.sand_x, self.deposit_half_width, self.deposit_wall_height),
+            (self.sand_x[0], self.deposit_half_width, self.deposit_wall_height),
             (self._box_x[0], self.goal_half_width, self.goal_wall_height),
         ):
             for side in (-1, 1):

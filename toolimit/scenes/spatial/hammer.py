@@ -37,6 +37,7 @@ from toolimit.scenes.base import (
     check_reset,
     dense_hammer_reward,
     dense_tool_point,
+    instance_positions,
     require_positive,
     require_reset,
     world_position,
@@ -149,36 +150,37 @@ class SpatialHammerScene(WindowedGoalScene):
             ),
         )
         # The state of the B instances, built by reset.
-        self._nail_xy = np.zeros(2)
-        self._start_top = 0.0
+        self._nail_xy = np.zeros((0, 2))  # (B, 2) the nails' x, y, m
+        self._start_top = np.zeros(0)  # (B,) z of the head tops at reset, m
         self.nail_top = np.zeros(0)  # (B,) z of the head top, m
         self.nail_speed = np.zeros(0)  # (B,) downward speed, m/s
         self._tool = SweptTool(0)
 
     # ----------------------------------------------------------------------------- parameters
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """Build B nails at ``params["nail_position"]``; the hammer is absent until ``step``.
+        """Build B nails at ``params["nail_position"]`` ((3,) or (B, 3), per instance); the hammer
+        is absent until ``step``.
 
         The scene has no randomness; ``rng`` is accepted for the protocol.
         """
         batch_size = check_reset(self, params, batch_size)
-        position = np.asarray(params["nail_position"], dtype=float)
+        position = instance_positions(params, "nail_position", batch_size)
         self.start_instances(batch_size)  # the clock starts at the tool's placement
-        self._nail_xy = position[:2].copy()
-        self._start_top = float(position[2])
-        self.nail_top = np.full(batch_size, self._start_top)
+        self._nail_xy = position[:, :2].copy()
+        self._start_top = position[:, 2].copy()
+        self.nail_top = self._start_top.copy()
         self.nail_speed = np.zeros(batch_size)
         self._tool = SweptTool(batch_size)
 
     # ---------------------------------------------------------------------------- geometry
     @property
-    def board_top(self) -> float:
-        """z of the board's top surface, m."""
+    def board_top(self) -> np.ndarray:
+        """(B,) z of the boards' top surfaces, m."""
         return self._start_top - self.plate_thickness - self.protrusion
 
     @property
-    def lowest_top(self) -> float:
-        """z of the nail head top when the plate rests on the board, m."""
+    def lowest_top(self) -> np.ndarray:
+        """(B,) z of the nail head tops when the plates rest on the boards, m."""
         return self._start_top - self.protrusion
 
     def remaining_depth(self) -> np.ndarray:
@@ -213,7 +215,7 @@ class SpatialHammerScene(WindowedGoalScene):
             return True
         reach = self.plate_half_size + np.max(np.abs(np.diff(points[..., :2], axis=0)), initial=0.0)
         low = points[..., 2] < self.nail_top[None, :, None]
-        near = np.all(np.abs(points[..., :2] - self._nail_xy) <= reach, axis=-1)
+        near = np.all(np.abs(points[..., :2] - self._nail_xy[:, None]) <= reach, axis=-1)
         return bool(np.any(low & near))
 
     def _substep(self, start: np.ndarray, end: np.ndarray, dt: float) -> None:
@@ -231,7 +233,7 @@ class SpatialHammerScene(WindowedGoalScene):
         crossing = descending & (z0 >= top_before[:, None] - 1e-9) & (z1 < top[:, None])
         fraction = np.clip((z0 - top[:, None]) / np.where(descending, z0 - z1, 1.0), 0.0, 1.0)
         xy = start[..., :2] + fraction[..., None] * (end[..., :2] - start[..., :2])
-        inside = np.all(np.abs(xy - self._nail_xy) <= self.plate_half_size, axis=-1)
+        inside = np.all(np.abs(xy - self._nail_xy[:, None]) <= self.plate_half_size, axis=-1)
         contact = crossing & inside  # (B, P)
         hit = np.any(contact, axis=1)
         pushed_top = np.min(np.where(contact, z1, np.inf), axis=1)
@@ -254,7 +256,7 @@ class SpatialHammerScene(WindowedGoalScene):
         """(B,) the paper appendix's closeness of the hammer's striking face to the nail head's
         centre (module docstring), in [0, 1]; 0 before the tool is placed."""
         centre = self.nail_top - self.plate_thickness / 2.0
-        nail_head = np.column_stack([np.broadcast_to(self._nail_xy, (self.batch_size, 2)), centre])
+        nail_head = np.column_stack([self._nail_xy, centre])
         if self._tool.position is None or self._tool.rotation is None:
             return dense_hammer_reward(None, nail_head)
         return dense_hammer_reward(self._tool.position + self._tool.rotation @ self._dense_point, nail_head)
@@ -273,18 +275,18 @@ class SpatialHammerScene(WindowedGoalScene):
         ``remaining_depth`` () m; ``tool_position`` (3,), ``tool_rotation`` (3, 3) (NaN before the
         first step); ``time`` () s.
         """
-        x, y = self._nail_xy
+        x, y = self._nail_xy[0]
         top = self.nail_top[0]
         plate_half = np.array([self.plate_half_size, self.plate_half_size, self.plate_thickness / 2])
         shank_half = np.array([self.shank_radius, self.shank_radius, self.shank_length / 2])
-        board_half = np.array([self.board_half_size, self.board_half_size, self.board_top / 2])
+        board_half = np.array([self.board_half_size, self.board_half_size, self.board_top[0] / 2])
         return {
             "nail_top": np.array([x, y, top]),
             "plate_center": np.array([x, y, top - self.plate_thickness / 2]),
             "plate_half_extents": plate_half,
             "shank_center": np.array([x, y, top - self.plate_thickness - self.shank_length / 2]),
             "shank_half_extents": shank_half,
-            "board_center": np.array([x, y, self.board_top / 2]),
+            "board_center": np.array([x, y, self.board_top[0] / 2]),
             "board_half_extents": board_half,
             "remaining_depth": np.array(self.remaining_depth()[0]),
             **tool_snapshot(self._tool.position, self._tool.rotation),

@@ -29,6 +29,7 @@ from toolimit.scenes.base import (
     WindowedGoalScene,
     check_reset,
     dense_scythe_reward,
+    instance_positions,
     require_counts,
     require_positive,
     require_reset,
@@ -93,7 +94,7 @@ class SpatialScytheScene(WindowedGoalScene):
             ),
         )
         # The state of the B instances, built by reset.
-        self.grass_position = np.zeros(3)  # patch centre, world, m
+        self.grass_position = np.zeros((0, 3))  # (B, 3) patch centres, world, m
         self.stalks_xy = np.zeros((0, self.n_stalks, 2))  # (B, N, 2) stalk positions on the ground, world x-y, m
         self.cut = np.zeros((0, self.n_stalks), dtype=bool)  # (B, N)
         self.cut_time = np.zeros((0, self.n_stalks))  # (B, N) s since the tool was placed
@@ -101,13 +102,14 @@ class SpatialScytheScene(WindowedGoalScene):
 
     # ----------------------------------------------------------------------------- parameters
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """Scatter B patches of stalks (each from ``rng``); the scythe is absent until ``step``."""
+        """Scatter B patches of stalks (each from ``rng``) at ``params["grass_position"]`` ((3,) or
+        (B, 3), per instance); the scythe is absent until ``step``."""
         b = check_reset(self, params, batch_size)
         self.start_instances(b)  # the clock starts at the tool's placement
-        self.grass_position = np.asarray(params["grass_position"], dtype=float).copy()
+        self.grass_position = instance_positions(params, "grass_position", b)
         half = np.array(self.patch_size) / 2
         #: (B, N, 2) stalk positions on the ground, world x-y, m.
-        self.stalks_xy = self.grass_position[:2] + rng.uniform(-half, half, size=(b, self.n_stalks, 2))
+        self.stalks_xy = self.grass_position[:, None, :2] + rng.uniform(-half, half, size=(b, self.n_stalks, 2))
         self.cut = np.zeros((b, self.n_stalks), dtype=bool)
         self.cut_time = np.full((b, self.n_stalks), np.inf)
         self._tool = SweptTool(b)
@@ -138,8 +140,8 @@ class SpatialScytheScene(WindowedGoalScene):
     def dense_reward(self) -> np.ndarray:
         """(B,) the paper appendix's closeness of the head point to the patch's centre on the
         ground (module docstring), in [0, 0.1]; 0 before the tool is placed."""
-        centre = np.array([self.grass_position[0], self.grass_position[1], 0.0])
-        return dense_scythe_reward(self._tool.position, np.broadcast_to(centre, (len(self.stalks_xy), 3)))
+        centre = self.grass_position * np.array([1.0, 1.0, 0.0])  # (B, 3) on the ground
+        return dense_scythe_reward(self._tool.position, centre)
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:
@@ -162,7 +164,7 @@ class SpatialScytheScene(WindowedGoalScene):
             "stalk_base": base,
             "stalk_half_extents": np.array([self.stalk_width / 2, self.stalk_width / 2, self.stalk_height / 2]),
             "stalk_cut": self.cut[0].copy(),
-            "patch_center": self.grass_position.copy(),
+            "patch_center": self.grass_position[0].copy(),
             "patch_half_extents": np.array(self.patch_size) / 2,
             "patch_yaw": np.array(0.0),
             "blade": blade,

@@ -8,8 +8,8 @@ World frame: metres, z up, ground z = 0. The scene is the original experiments' 
   that frame the walls stand at x = -+0.2 m and at y = -0.2 m, and the side y = +0.2 m is open;
 * the **goal box** is an open-top square box of inner side ``GOAL_INNER`` (0.5 m) with walls
   ``GOAL_WALL_HEIGHT`` (7 cm) high, axis-aligned, centred at ``goal_position``; the ground is its
-  floor. ``goal_position`` may be (B, 3), one box per instance (domain randomisation): each
-  instance then has its own wall set (same count, same cost), and the goal region follows it;
+  floor. Both positions may be (B, 3), one per instance (the learner's reset noise, domain
+  randomisation's boxes): each instance has its own wall set, and the goal region follows it;
 * ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap**: as in the
   original, dropped once from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of
   height), simulated to rest and cached (:func:`settled_heap`), then moved to the deposit at
@@ -81,6 +81,7 @@ from toolimit.scenes.base import (
     check_reset,
     dense_spade_reward,
     dense_tool_point,
+    instance_positions,
     parameter_violation,
     world_position,
 )
@@ -245,10 +246,11 @@ class SpatialSpadeScene(SceneBase):
                 unit="rad",
                 description="yaw of the deposit (its open side faces its +y)",
             ),
-            world_position("goal_position", "centre of the goal box's floor", axes=(0, 1), per_instance=True),
+            world_position("goal_position", "centre of the goal box's floor", axes=(0, 1)),
         )
         # The state of the B instances, built by reset.
-        self.sand_position, self.sand_yaw = np.zeros(3), 0.0  # m, rad
+        self.sand_position = np.zeros((0, 3))  # (B, 3) deposit floor centres, m
+        self.sand_yaw = 0.0  # rad
         self.goal_position = np.zeros((0, 3))  # (B, 3) goal box floor centres, m
         self._dense_point = dense_tool_point("spade")  # (3,) tool frame, m: the handle end
         self.walls = StaticBoxes(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
@@ -281,31 +283,36 @@ class SpatialSpadeScene(SceneBase):
 
     # --------------------------------------------------------------------------------- lifecycle
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
-        """B instances: walls at ``params``, the cached heap shifted by ``rng`` per instance; no spade yet."""
+        """B instances: walls at ``params`` (each position (3,) or (B, 3), per instance), the cached
+        heap shifted by ``rng`` per instance; no spade yet."""
         batch_size = check_reset(self, params, batch_size)
         b = self.batch_size = batch_size
-        self.sand_position = np.asarray(params["sand_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
+        on_ground = np.array([1.0, 1.0, 0.0])
+        self.sand_position = instance_positions(params, "sand_position", b) * on_ground
         self.sand_yaw = float(params["sand_yaw"])
-        goal = np.asarray(params["goal_position"], dtype=float) * np.array([1.0, 1.0, 0.0])
-        self.goal_position = np.broadcast_to(goal, (b, 3)).copy()
+        self.goal_position = instance_positions(params, "goal_position", b) * on_ground
         deposit_rotation = rotation_z(self.sand_yaw)
         deposit_centers, deposit_halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, ("-x", "+x", "-y"))
         goal_centers, goal_halves = _walls(GOAL_INNER, GOAL_WALL_HEIGHT, ("-x", "+x", "-y", "+y"))
-        # one wall set shared by all instances, or one per instance if each has its own goal box
-        shape = goal.shape[:-1]
-        deposit_centers = np.broadcast_to(self.sand_position + deposit_centers @ deposit_rotation.T, (*shape, 3, 3))
+        # one wall set per instance: the deposit's walls then the goal box's
         self.walls = StaticBoxes(
-            centers=np.concatenate([deposit_centers, goal[..., None, :] + goal_centers], axis=-2),
+            centers=np.concatenate(
+                [
+                    self.sand_position[:, None] + deposit_centers @ deposit_rotation.T,
+                    self.goal_position[:, None] + goal_centers,
+                ],
+                axis=1,
+            ),
             rotations=np.broadcast_to(
                 np.concatenate([np.repeat(deposit_rotation[None], 3, 0), np.repeat(np.eye(3)[None], 4, 0)]),
-                (*shape, 7, 3, 3),
+                (b, 7, 3, 3),
             ),
-            half_extents=np.broadcast_to(np.concatenate([deposit_halves, goal_halves]), (*shape, 7, 3)),
+            half_extents=np.broadcast_to(np.concatenate([deposit_halves, goal_halves]), (b, 7, 3)),
         )
         heap = settled_heap(self.n_spheres, self.material, self.substeps)
-        shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * np.array([1.0, 1.0, 0.0]) * (DEPOSIT_INNER - HEAP_PEN) / 2
+        shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * on_ground * (DEPOSIT_INNER - HEAP_PEN) / 2
         self._world = ParticleWorld(self.material, self.walls, self.shapes, self.threads)
-        self._world.reset(self.sand_position + (heap + shift) @ deposit_rotation.T)
+        self._world.reset(self.sand_position[:, None] + (heap + shift) @ deposit_rotation.T)
         self._goal_reward = None
         #: Steps that ended with >= SUCCESS_SPHERES in the box.
         self.success_tracker = SuccessTracker(b)
@@ -381,13 +388,9 @@ class SpatialSpadeScene(SceneBase):
         and benchmarks.
         """
         positions = self._require_reset().positions
-        walls = self.walls
-        b = len(positions)
-        centers = np.broadcast_to(walls.centers, (b, *walls.centers.shape[-2:]))
-        rotations = np.broadcast_to(walls.rotations, (b, *walls.rotations.shape[-3:]))
-        halves = np.broadcast_to(walls.half_extents, (b, *walls.half_extents.shape[-2:]))
-        local = np.einsum("bnkj,bkja->bnka", positions[:, :, None] - centers[:, None], rotations)
-        outside = np.linalg.norm(np.maximum(np.abs(local) - halves[:, None], 0.0), axis=-1)
+        walls = self.walls  # (B, K, ...) per instance
+        local = np.einsum("bnkj,bkja->bnka", positions[:, :, None] - walls.centers[:, None], walls.rotations)
+        outside = np.linalg.norm(np.maximum(np.abs(local) - walls.half_extents[:, None], 0.0), axis=-1)
         radius = self.material.radius
         deepest = np.maximum(radius - positions[..., 2], radius - outside.min(axis=-1))
         return np.maximum(deepest.max(axis=1), 0.0)
@@ -423,10 +426,10 @@ class SpatialSpadeScene(SceneBase):
         return {
             "sphere_positions": world.positions[0].copy(),
             "sphere_radius": np.array(self.material.radius),
-            "wall_centers": instance_zero(self.walls.centers, 2),
-            "wall_rotations": instance_zero(self.walls.rotations, 3),
-            "wall_half_extents": instance_zero(self.walls.half_extents, 2),
-            "sand_position": self.sand_position.copy(),
+            "wall_centers": self.walls.centers[0].copy(),
+            "wall_rotations": self.walls.rotations[0].copy(),
+            "wall_half_extents": self.walls.half_extents[0].copy(),
+            "sand_position": self.sand_position[0].copy(),
             "sand_yaw": np.array(self.sand_yaw),
             "goal_position": self.goal_position[0].copy(),
             "goal_inner": np.array(GOAL_INNER),
@@ -434,8 +437,3 @@ class SpatialSpadeScene(SceneBase):
             **tool_snapshot(world.tool_position, world.tool_rotation),
             "in_box": np.array(self.goal_reward()[0]),
         }
-
-
-def instance_zero(array: np.ndarray, ndim: int) -> np.ndarray:
-    """A copy of instance 0's part of a shared (``ndim`` axes) or per-instance (``ndim`` + 1) array."""
-    return np.array(array if array.ndim == ndim else array[0])
