@@ -18,9 +18,9 @@ The best of a long run's thousands of 20-episode checks flatters its policy: on 
 best check (0.90, at 13.58 M steps) was of a policy that succeeded in 8 of 20 evaluation episodes,
 where the last update's succeeded in 14. So at the end of a run whose best check is not its last
 update, both policies are rolled out on ``episodes`` deterministic episodes of their own
-(:data:`SELECTION_SEED`), and the best check's is kept only when it does better there (success, then goal reward); the last update's otherwise. Two candidates judged
-on 200 fresh episodes leave little to flatter, and the final evaluation's episodes still chose
-nothing.
+(:data:`SELECTION_SEED`), and the best check's is kept only when it does better there (success,
+then goal reward); the last update's otherwise. Two candidates judged on 200 fresh episodes leave
+little to flatter, and the final evaluation's episodes still chose nothing.
 """
 
 from __future__ import annotations

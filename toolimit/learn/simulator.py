@@ -27,12 +27,12 @@ Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each
   authors' environments drew its own at its reset; an instance whose draw pushes one element into
   another keeps the exact positions); the scene's own randomness (sand jitter, ...).
 Goal box (spades): under ADR each instance's box is drawn inside the current ADR bounds
-  (:meth:`AdrBounds.draw <toolimit.learn.adr.AdrBounds.draw>`: uniform, one position per instance,
-  the scenes take a box per instance; redrawn where it would overlap its instance's noisy deposit), without
-  the N(0, 0.01) noise (a box that finds no valid position in 100 draws stands at the aligned one,
-  and ``box_placed`` says so: ADR's boundary tests do not count its episode at the bound);
-  ``reset(rng, box_positions)`` sets the positions instead (heat maps). The bounds start collapsed
-  on the aligned position, so cloning rollouts run there.
+  (:meth:`AdrBounds.draw <toolimit.learn.adr.AdrBounds.draw>`: uniform, one position per instance;
+  redrawn where it would overlap its instance's noisy deposit), without the N(0, 0.01) noise (a
+  box that finds no valid position in 100 draws stands at the aligned one, and ``box_placed`` says
+  so: ADR's boundary tests do not count its episode at the bound); ``reset(rng, box_positions)``
+  sets the positions instead (heat maps). The bounds start collapsed on the aligned position, so
+  cloning rollouts run there.
 """
 
 from __future__ import annotations
