@@ -49,7 +49,7 @@ def selection_outcome(
 ) -> dict[str, float]:
     """``model``'s success rate and mean goal reward over ``episodes`` deterministic episodes of
     ``task`` from :data:`SELECTION_SEED`."""
-    outcome = evaluate(model, task, episodes, True, SELECTION_SEED, scene_kwargs)
+    outcome = evaluate(model, task, episodes, deterministic=True, seed=SELECTION_SEED, scene_kwargs=scene_kwargs)
     record = outcome.record()
     return {"success_rate": record["success_rate"], "goal_reward_mean": record["goal_reward_mean"]}
 
