@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 
 import numba
 import numpy as np
@@ -56,20 +57,28 @@ def test_files_and_record(spade_task, tmp_path):
 
 
 def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
-    """Three updates in one go, or stopped during the third and run again: same network."""
+    """Three updates in one go, or stopped during the third and run again: same network, and the
+    record's times count the first sitting up to its last checkpoint."""
     per_update = spade_task.horizon * 2  # 1 episode per update (toolimit preset) x 2 envs
     three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)
+    pause_s = 1.0
 
-    def stop(record: dict) -> None:  # called as the third update's rollout starts
+    def stop(record: dict) -> None:  # called as an update's rollout starts, before its checkpoint
+        if record["env_steps"] == per_update:
+            time.sleep(pause_s)  # in the first sitting, before the checkpoint the run resumes from
         if record["env_steps"] == 2 * per_update:
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
         learn_policy(spade_task, tmp_path / "split", three, on_record=stop, progress=False)
     assert (tmp_path / "split" / "checkpoint.zip").is_file() and not (tmp_path / "split" / "policy.zip").exists()
+    started = time.perf_counter()
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
+    second_sitting_s = time.perf_counter() - started
     assert resumed.record["resumed"] and resumed.model.num_timesteps == 3 * per_update
+    assert resumed.record["wall_time_s"] > second_sitting_s + pause_s
+    assert resumed.record["simulation_time_s"] > 0
     np.testing.assert_allclose(_parameters(resumed.model), _parameters(whole.model), rtol=0, atol=1e-6)
     lines = (tmp_path / "split" / CURVE_JSONL).read_text().splitlines()
     assert len(lines) == 3

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, cast
@@ -165,28 +166,35 @@ class _StdFloor(BaseCallback):
         return True
 
 
+#: The run's elapsed times so far, across its sittings (``wall_time_s``, ``simulation_time_s``).
+Elapsed = Callable[[], dict[str, float]]
+
+
 class _Checkpoints(BaseCallback):
     """Saves the model and the random states every ``every`` updates, at the update's start (an
     episode boundary), so that :func:`train` can resume exactly."""
 
-    def __init__(self, directory: Path, every: int):
+    def __init__(self, directory: Path, every: int, elapsed: Elapsed | None):
         super().__init__()
-        self.directory, self.every, self.updates = directory, every, 0
+        self.directory, self.every, self.elapsed, self.updates = directory, every, elapsed, 0
 
     def _on_rollout_start(self) -> None:
         if self.updates and self.updates % self.every == 0:
-            save_checkpoint(cast(PPO, self.model), self.directory)
+            save_checkpoint(cast(PPO, self.model), self.directory, elapsed=self.elapsed)
         self.updates += 1
 
     def _on_step(self) -> bool:
         return True
 
 
-def save_checkpoint(model: PPO, directory: Path, model_file: str = CHECKPOINT_ZIP) -> None:
+def save_checkpoint(
+    model: PPO, directory: Path, model_file: str = CHECKPOINT_ZIP, elapsed: Elapsed | None = None
+) -> None:
     """Write the model (SB3: parameters, optimiser) to ``model_file`` and ``checkpoint.json`` (that
     file's name, steps done, the environment's generator state before its last reset, torch's random
-    state, the ADR state) atomically. The final checkpoint of :func:`train` is ``policy.zip`` itself,
-    so that a finished run keeps one copy of its model (``checkpoint.zip`` is then removed)."""
+    state, the ADR state, ``elapsed()``'s times: a resumed run's record counts its earlier sittings)
+    atomically. The final checkpoint of :func:`train` is ``policy.zip`` itself, so that a finished
+    run keeps one copy of its model (``checkpoint.zip`` is then removed)."""
     env: BatchedTaskVecEnv = model.get_env()  # type: ignore[assignment]
     state = {
         "model": model_file,
@@ -198,6 +206,8 @@ def save_checkpoint(model: PPO, directory: Path, model_file: str = CHECKPOINT_ZI
     }
     if env.adr is not None:
         state["adr"] = env.adr.state_dict()
+    if elapsed is not None:
+        state["elapsed"] = elapsed()
     with atomic_path(directory / model_file) as tmp:
         model.save(tmp)
     save_json(directory / CHECKPOINT_STATE, state)
@@ -242,23 +252,37 @@ def train(
     checkpoint_every: int = 10,
     callbacks: list[BaseCallback] | None = None,
     final_file: str = POLICY_ZIP,
+    elapsed: Elapsed | None = None,
 ) -> PPO:
     """Run PPO until ``model.num_timesteps`` reaches ``total_timesteps``, checkpointing into
-    ``directory`` every ``checkpoint_every`` updates; ``final_file`` is the final model and the final
-    checkpoint (a larger budget continues from it): ``policy.zip``, or ``checkpoint.zip`` when the
-    run's policy is another one (:mod:`toolimit.learn.kept_policy`). Interrupted (Ctrl-C), the last
-    checkpoint stays: :func:`resume_or_start` continues it."""
+    ``directory`` every ``checkpoint_every`` updates (with ``elapsed()``'s times, if given);
+    ``final_file`` is the final model and the final checkpoint (a larger budget continues from it):
+    ``policy.zip``, or ``checkpoint.zip`` when the run's policy is another one
+    (:mod:`toolimit.learn.kept_policy`). Interrupted (Ctrl-C), the last checkpoint stays:
+    :func:`resume_or_start` continues it."""
     directory = Path(directory)
     remaining = total_timesteps - model.num_timesteps
     if remaining > 0:
         model.learn(
             remaining,
-            callback=CallbackList([_StdFloor(), *(callbacks or []), _Checkpoints(directory, checkpoint_every)]),
+            callback=CallbackList(
+                [_StdFloor(), *(callbacks or []), _Checkpoints(directory, checkpoint_every, elapsed)]
+            ),
             reset_num_timesteps=False,
             log_interval=1,
         )
-    save_checkpoint(model, directory, final_file)
+    save_checkpoint(model, directory, final_file, elapsed)
     return model
+
+
+def checkpoint_elapsed(directory: str | os.PathLike[str]) -> dict[str, float] | None:
+    """The elapsed times ``directory``'s checkpoint recorded (:func:`save_checkpoint`), or None
+    (no checkpoint, or one written before checkpoints held them)."""
+    state_path = Path(directory) / CHECKPOINT_STATE
+    if not state_path.is_file():
+        return None
+    elapsed = json.loads(state_path.read_text()).get("elapsed")
+    return None if elapsed is None else {key: float(value) for key, value in elapsed.items()}
 
 
 def resume_or_start(directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any) -> tuple[PPO, bool]:

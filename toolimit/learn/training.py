@@ -47,6 +47,7 @@ from toolimit.learn.ppo import (
     POLICY_ZIP,
     PRESETS,
     PpoSettings,
+    checkpoint_elapsed,
     make_ppo,
     resume_or_start,
     train,
@@ -389,18 +390,25 @@ def _learn_policy(
         callbacks.append(AdrCallback(env, config.adr_every))
     learnt = checks is not None and checks.stopped_at is not None  # a resumed run that had stopped
     budget = model.num_timesteps if learnt else config.timesteps
+
+    def elapsed() -> dict[str, float]:
+        """The run's times so far, its earlier sittings' included (the checkpoints keep them)."""
+        return {
+            "wall_time_s": previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started,
+            "simulation_time_s": previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s,
+        }
+
     try:
-        train(
-            model, budget, out_dir, config.checkpoint_every, callbacks, POLICY_ZIP if kept is None else CHECKPOINT_ZIP
-        )
+        final_file = POLICY_ZIP if kept is None else CHECKPOINT_ZIP
+        train(model, budget, out_dir, config.checkpoint_every, callbacks, final_file, elapsed)
     finally:
         env.close()  # ends the simulation's worker processes (multiprocessing's exit hook, if earlier)
     policy, choice = (
         (model, None) if kept is None else kept.install(out_dir / POLICY_ZIP, model, out_dir / CHECKPOINT_ZIP)
     )
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
-    wall = previous.get("wall_time_s", 0.0) * resumed + time.perf_counter() - started
-    simulation = previous.get("simulation_time_s", 0.0) * resumed + env.simulation_time_s
+    times = elapsed()
+    wall, simulation = times["wall_time_s"], times["simulation_time_s"]
     record = {
         "tool": task.tool,
         "world": task.world,
@@ -479,16 +487,19 @@ def _clone(
 
 
 def _previous_record(out_dir: Path) -> dict[str, Any]:
-    """The learning record of an interrupted run (its cloning steps and times), if the checkpoint
-    exists; the cloning record stands in for a run interrupted before its first record."""
+    """The learning record of a run to resume (its cloning steps and times), if the checkpoint
+    exists; the cloning record stands in for a run interrupted before its first record. The times
+    are the checkpoint's (up to it, whether the run was interrupted or ended), else the record's."""
     if not (out_dir / CHECKPOINT_STATE).is_file():
         return {}
+    record: dict[str, Any] = {}
     for name, key in ((LEARNING_JSON, None), (CLONING_JSON, "env_steps")):
         path = out_dir / name
         if path.is_file():
             data = json.loads(path.read_text())
-            return data if key is None else {"cloning_env_steps": data[key]}
-    return {}
+            record = data if key is None else {"cloning_env_steps": data[key]}
+            break
+    return record | (checkpoint_elapsed(out_dir) or {})
 
 
 def _truncate_curve(path: Path, env_steps: int) -> list[dict[str, Any]]:
