@@ -275,14 +275,13 @@ def train(
     return model
 
 
-def checkpoint_elapsed(directory: str | os.PathLike[str]) -> dict[str, float] | None:
-    """The elapsed times ``directory``'s checkpoint recorded (:func:`save_checkpoint`), or None
-    (no checkpoint, or one written before checkpoints held them)."""
+def checkpoint_elapsed(directory: str | os.PathLike[str]) -> dict[str, float]:
+    """The elapsed times ``directory``'s checkpoint recorded (:func:`save_checkpoint`); empty without
+    a checkpoint or for one written before checkpoints held them."""
     state_path = Path(directory) / CHECKPOINT_STATE
     if not state_path.is_file():
-        return None
-    elapsed = json.loads(state_path.read_text()).get("elapsed")
-    return None if elapsed is None else {key: float(value) for key, value in elapsed.items()}
+        return {}
+    return {key: float(value) for key, value in json.loads(state_path.read_text()).get("elapsed", {}).items()}
 
 
 def resume_or_start(directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any) -> tuple[PPO, bool]:

@@ -499,7 +499,7 @@ def _previous_record(out_dir: Path) -> dict[str, Any]:
             data = json.loads(path.read_text())
             record = data if key is None else {"cloning_env_steps": data[key]}
             break
-    return record | (checkpoint_elapsed(out_dir) or {})
+    return record | checkpoint_elapsed(out_dir)
 
 
 def _truncate_curve(path: Path, env_steps: int) -> list[dict[str, Any]]:
