@@ -16,7 +16,7 @@ velocity between control poses, as the scene moves the tool) at the scene's 10 s
   edge normal (the snath, towards the hands: the rule's approach) and along the blade, the
   normal's elevation above horizontal (the rule allows 30 degrees) and the edge's height.
 
-A few seconds on one core for 200 episodes.
+About 10 s on one core for 200 episodes.
 
     python benchmarks/scythe_cut_sampling.py --policy runs/scythe_03/learning --out benchmarks/results/scythe_cut_sampling.json
 """
