@@ -46,10 +46,14 @@ def main() -> None:
     parser.add_argument("--fine", type=int, default=100, help="sub-steps per control step of the fine test")
     parser.add_argument("--out", type=Path, required=True, help="JSON file written")
     args = parser.parse_args()
-    model, task = load_policy(args.policy)
+    try:
+        model, task = load_policy(args.policy)
+    except FileNotFoundError as error:
+        parser.error(str(error))
     simulator = TaskSimulator(task, batch_size=args.episodes)
     scene = simulator.scene
-    assert isinstance(scene, SpatialScytheScene), f"{args.policy}: not a 3D scythe policy"
+    if not isinstance(scene, SpatialScytheScene):
+        parser.error(f"{args.policy}: not a 3D scythe policy")
     observation = simulator.reset(np.random.default_rng(args.seed))
     positions, rotations = [], []  # the tool pose after each control step: (B, 3) m, (B, 3, 3) world from tool
     while not simulator.done:
@@ -72,12 +76,13 @@ def main() -> None:
         return first
 
     coarse, fine = first_cut_step(scene.substeps) >= 0, first_cut_step(args.fine)
+    fine_cut = fine >= 0
     assert np.array_equal(coarse, cut), "the replay at the scene's sub-steps must cut what the scene cut"
     in_patch = stalks - patch[:, None, :2]  # (B, N, 2) m from the patch's centre
     half_length, half_width = np.array(scene.patch_size) / 2
     x_range, y_range = (-half_length, half_length), (-half_width, half_width)
     rows = []
-    for k in sorted(set(fine[fine >= 0].tolist())):
+    for k in sorted(set(fine[fine_cut].tolist())):
         edge = [
             p + np.einsum("bij,j->bi", r, rule.edge.mean(axis=0))
             for p, r in ((positions[k - 1], rotations[k - 1]), (positions[k], rotations[k]))
@@ -103,10 +108,10 @@ def main() -> None:
         "fine_substeps": args.fine,
         "stalks_cut_mean": float(coarse.sum(axis=1).mean()),
         "success_rate": float(coarse.all(axis=1).mean()),
-        "stalks_cut_mean_fine": float((fine >= 0).sum(axis=1).mean()),
-        "success_rate_fine": float((fine >= 0).all(axis=1).mean()),
+        "stalks_cut_mean_fine": float(fine_cut.sum(axis=1).mean()),
+        "success_rate_fine": float(fine_cut.all(axis=1).mean()),
         "uncut": int((~coarse).sum()),
-        "uncut_cut_by_fine": int((~coarse & (fine >= 0)).sum()),
+        "uncut_cut_by_fine": int((~coarse & fine_cut).sum()),
         "uncut_by_patch_x": np.histogram(in_patch[~coarse][:, 0], X_BINS, x_range)[0].tolist(),
         "all_by_patch_x": np.histogram(in_patch[..., 0], X_BINS, x_range)[0].tolist(),
         "uncut_by_patch_y": np.histogram(in_patch[~coarse][:, 1], Y_BINS, y_range)[0].tolist(),
