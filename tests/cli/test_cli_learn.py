@@ -65,6 +65,7 @@ def test_resuming_a_checkpoint_of_an_earlier_adr_rule_is_one_line_exit_2(tmp_pat
      "no shipped task for the spade in planar with robot ur5"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--envs", "0"], "--envs: must be an integer >= 1"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--action-std", "0"], "--action-std: must be a finite number > 0"),
+    (["learn", "--env", "toolimit/SpadePlanar-v0", "--target-kl", "0"], "--target-kl: must be a finite number > 0"),
     (["evaluate", "--policy", "absent"], "--policy: no such folder"),
     (["learn", "--env", "toolimit/HammerPlanar-v0", "--adr"], "the hammer scene has none (only the spades)"),
     (["learn", "--env", "toolimit/SpadePlanar-v0", "--adr-every", "0"], "--adr-every: must be an integer >= 1"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 
@@ -124,6 +125,26 @@ def test_evaluation_reports_success_and_joint_trajectories(spade_task, tmp_path)
     assert record["episodes"] == 3 and 0.0 <= record["success_rate"] <= 1.0
 
 
+def test_a_checkpoint_is_not_resumed_with_other_ppo_settings(spade_task, tmp_path):
+    """SB3's checkpoint keeps its own settings: a resume with others is refused, and the run's
+    files stay as they were (the task file is written again first, the same task)."""
+    per_update = spade_task.horizon * 2
+    learn_policy(spade_task, tmp_path, LearningConfig(**{**TINY.__dict__, "timesteps": per_update}), progress=False)
+
+    def written() -> dict:
+        return {path.name: path.read_bytes() for path in tmp_path.iterdir() if path.name != "task.npz"}
+
+    before = written()
+    faster = LearningConfig(**{**TINY.__dict__, "timesteps": 2 * per_update, "learning_rate": 1e-4})
+    with pytest.raises(InputError) as refused:
+        learn_policy(spade_task, tmp_path, faster, progress=False)
+    assert str(refused.value) == (
+        f"{tmp_path / 'checkpoint.json'}: this checkpoint was written with other PPO settings "
+        "(learning_rate: 0.0003, now 0.0001); give the flags it was written with, or start a new output folder"
+    )
+    assert written() == before
+
+
 def test_evaluation_refuses_zero_episodes(spade_task):
     model = make_ppo(BatchedTaskVecEnv(spade_task, 2, seed=0), PRESETS["toolimit"], seed=0)
     with pytest.raises(InputError, match="^episodes must be >= 1, got 0$"):
@@ -135,6 +156,27 @@ def test_unknown_preset_is_refused():
         LearningConfig(preset="fast").settings()
 
 
+def test_the_learning_rate_and_target_kl_given_replace_the_presets():
+    assert LearningConfig(preset="toolimit").settings() == PRESETS["toolimit"]
+    settings = LearningConfig(preset="toolimit", learning_rate=1e-4, target_kl=0.1).settings()
+    assert settings == dataclasses.replace(PRESETS["toolimit"], learning_rate=1e-4, target_kl=0.1)
+
+
+@pytest.mark.parametrize(("target_kl", "steps_per_update"), [(None, 4), (1e-12, 1)])
+def test_target_kl_stops_an_update_after_its_first_minibatch_step(spade_task, tmp_path, target_kl, steps_per_update):
+    """The preset's four minibatch steps per update, or with a tiny ``target_kl`` only the first: it
+    starts at the rollout's own policy (KL 0), and the second minibatch's KL exceeds the bound."""
+    from toolimit.learn.ppo import train
+
+    settings = LearningConfig(preset="toolimit", target_kl=target_kl).settings()
+    model = make_ppo(BatchedTaskVecEnv(spade_task, 2, seed=0), settings, seed=0)
+    steps = []
+    model.policy.optimizer.register_step_post_hook(lambda *_: steps.append(1))
+    updates = 2
+    train(model, updates * 2 * spade_task.horizon, tmp_path, checkpoint_every=10)
+    assert len(steps) == updates * steps_per_update
+
+
 @pytest.mark.parametrize(
     ("field", "value", "said"),
     [
@@ -144,6 +186,8 @@ def test_unknown_preset_is_refused():
         ("torch_threads", 0, "torch_threads: must be an integer >= 1, got 0"),
         ("clone_noise", float("nan"), "clone_noise: must be a finite number >= 0, got nan"),
         ("action_std", 0.0, "action_std: must be a finite number > 0 (rad/s), got 0.0"),
+        ("target_kl", 0.0, "target_kl: must be a finite number > 0, got 0.0"),
+        ("learning_rate", float("inf"), "learning_rate: must be a finite number > 0, got inf"),
         ("reward", "shaped", "reward: unknown reward 'shaped'; choose one of sparse, dense"),
         (
             "sim_threads",

@@ -30,12 +30,20 @@ if TYPE_CHECKING:
     from toolimit.learn.task import LearningTask
     from toolimit.learn.training import LearningConfig
 
+
+def show_preset_override(value: float | None) -> str:
+    """The help's text of the default of a flag that overrides the PPO preset (None: the preset's)."""
+    return "the preset's" if value is None else str(value)
+
+
 #: The budget and learner flags, shared by ``toolimit learn`` and ``toolimit run`` (fields of
 #: :class:`~toolimit.learn.training.LearningConfig`).
 LEARNING_FLAGS = (
     Flag("timesteps"),
     Flag("envs"),
     Flag("preset", choices=tuple(sorted(PRESETS))),
+    Flag("learning_rate", show=show_preset_override),
+    Flag("target_kl", show=show_preset_override),
     Flag("clone"),
     Flag("clone_rollouts"),
     Flag("clone_noise"),

@@ -215,8 +215,10 @@ def save_checkpoint(
         (directory / CHECKPOINT_ZIP).unlink(missing_ok=True)
 
 
-def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
-    """The model of ``directory``'s checkpoint with ``env`` and random states restored, or None."""
+def load_checkpoint(directory: Path, env: BatchedTaskVecEnv, settings: PpoSettings | None = None) -> PPO | None:
+    """The model of ``directory``'s checkpoint with ``env`` and random states restored, or None.
+    InputError if it was written with PPO settings other than ``settings`` (when given): SB3's
+    checkpoint keeps its own, so a resume would silently ignore the new ones."""
     state_path = directory / CHECKPOINT_STATE
     if not state_path.is_file():
         return None
@@ -229,6 +231,11 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
             raise InputError(f"{state_path}: this checkpoint was written without --adr; start a new output folder")
         env.adr.load_state_dict(state["adr"], str(state_path))
     model = PPO.load(zip_path, env=env, device="cpu")
+    if settings is not None and (changed := _changed_settings(model, settings)):
+        raise InputError(
+            f"{state_path}: this checkpoint was written with other PPO settings ({'; '.join(changed)}); "
+            "give the flags it was written with, or start a new output folder"
+        )
     model.num_timesteps = int(state["num_timesteps"])
     model.policy.log_std.requires_grad_(bool(state["learn_std"]))
     env.restore_rng_state(state["env_rng"])
@@ -236,6 +243,18 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv) -> PPO | None:
     name, keys, position, has_gauss, gauss = state["numpy_rng"]
     np.random.set_state((name, np.array(keys, dtype=np.uint32), position, has_gauss, gauss))
     return model
+
+
+def _changed_settings(model: PPO, settings: PpoSettings) -> list[str]:
+    """The settings of SB3's own (:meth:`PpoSettings.sb3_kwargs`) whose value in a loaded
+    ``model`` is not ``settings``', as "name: was, now" texts."""
+    changed = []
+    for name, value in settings.sb3_kwargs().items():
+        loaded = getattr(model, name)
+        loaded = loaded(1.0) if callable(loaded) else loaded  # SB3 keeps the clip range as a schedule
+        if loaded != value:
+            changed.append(f"{name}: {loaded!r}, now {value!r}")
+    return changed
 
 
 def _numpy_global_state() -> list[Any]:
@@ -284,9 +303,12 @@ def checkpoint_elapsed(directory: str | os.PathLike[str]) -> dict[str, float]:
     return {key: float(value) for key, value in json.loads(state_path.read_text()).get("elapsed", {}).items()}
 
 
-def resume_or_start(directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any) -> tuple[PPO, bool]:
-    """(model, resumed): the checkpoint in ``directory`` if there is one, else ``start()``'s model."""
-    model = load_checkpoint(Path(directory), env)
+def resume_or_start(
+    directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any, settings: PpoSettings | None = None
+) -> tuple[PPO, bool]:
+    """(model, resumed): the checkpoint in ``directory`` if there is one (written with ``settings``,
+    when given: :func:`load_checkpoint`), else ``start()``'s model."""
+    model = load_checkpoint(Path(directory), env, settings)
     return (model, True) if model is not None else (start(), False)
 
 

@@ -21,7 +21,7 @@ import json
 import numbers
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any, cast
 
@@ -66,6 +66,9 @@ CLONE_CHECK_EPISODES = 20
 CLONE_CHECK_SEED = 4000
 CLONING_JSON = "cloning.json"
 CURVE_JSONL = "curve.jsonl"
+#: The fields of :class:`LearningConfig` that, when given, replace the preset's
+#: :class:`~toolimit.learn.ppo.PpoSettings` field of the same name.
+PRESET_OVERRIDES = ("learning_rate", "target_kl")
 
 
 @dataclass(frozen=True)
@@ -79,6 +82,11 @@ class LearningConfig:
         envs: B, instances stepped together.
         preset: PPO settings: the authors' or the project's (a looser gradient clip and RAdam), a
             key of :data:`toolimit.learn.ppo.PRESETS`.
+        learning_rate: PPO's optimiser step size, replacing the preset's (None keeps it). An Adam
+            or RAdam step moves each weight by about it, whatever the gradient's size.
+        target_kl: a bound on each PPO update's approximate KL divergence, replacing the preset's
+            (None keeps it; neither preset has one): SB3 skips an update's remaining minibatches
+            once one's KL exceeds 1.5 times it. PPO's ratio clip does not bound a step's size.
         clone: behaviour cloning before PPO (without it: PPO from a random policy with a learned std, the
             sparse-reward baseline).
         clone_rollouts: tracking-controller rollouts to clone (1 = the authors' single rollout).
@@ -123,6 +131,8 @@ class LearningConfig:
     timesteps: int = 300_000
     envs: int = 16
     preset: str = "authors"
+    learning_rate: float | None = None
+    target_kl: float | None = None
     clone: bool = True
     clone_rollouts: int = 8
     clone_noise: float = 0.3
@@ -163,6 +173,10 @@ class LearningConfig:
                 raise InvalidLearningConfig(field, f"must be an integer >= {lowest}, got {value!r}")
         if not 0.0 <= self.clone_noise < float("inf"):
             raise InvalidLearningConfig("clone_noise", f"must be a finite number >= 0, got {self.clone_noise!r}")
+        for field in PRESET_OVERRIDES:
+            value = getattr(self, field)
+            if value is not None and not 0.0 < value < float("inf"):
+                raise InvalidLearningConfig(field, f"must be a finite number > 0, got {value!r}")
         if not 0.0 < self.action_std < float("inf"):
             raise InvalidLearningConfig("action_std", f"must be a finite number > 0 (rad/s), got {self.action_std!r}")
         if not isinstance(self.sim_processes, numbers.Integral) or not 1 <= self.sim_processes <= self.envs:
@@ -190,8 +204,9 @@ class LearningConfig:
             raise InvalidLearningConfig("stop", f"must be a StopRule, got {self.stop!r}")
 
     def settings(self) -> PpoSettings:
-        """The PPO settings of the preset."""
-        return PRESETS[self.preset]
+        """The PPO settings of the preset, with ``learning_rate`` and ``target_kl`` where given."""
+        given = {field: getattr(self, field) for field in PRESET_OVERRIDES}
+        return replace(PRESETS[self.preset], **{field: value for field, value in given.items() if value is not None})
 
     def threads_per_process(self) -> int:
         """``sim_threads``, or when None the cores this process is given
@@ -375,7 +390,7 @@ def _learn_policy(
 
     previous = _previous_record(out_dir)
     try:
-        model, resumed = resume_or_start(out_dir, env, start)
+        model, resumed = resume_or_start(out_dir, env, start, settings)
     except BaseException:  # a refused checkpoint or clone: the simulation's workers end here too
         env.close()
         raise
