@@ -215,10 +215,10 @@ def save_checkpoint(
         (directory / CHECKPOINT_ZIP).unlink(missing_ok=True)
 
 
-def load_checkpoint(directory: Path, env: BatchedTaskVecEnv, settings: PpoSettings | None = None) -> PPO | None:
+def load_checkpoint(directory: Path, env: BatchedTaskVecEnv, settings: PpoSettings) -> PPO | None:
     """The model of ``directory``'s checkpoint with ``env`` and random states restored, or None.
-    InputError if it was written with PPO settings other than ``settings`` (when given): SB3's
-    checkpoint keeps its own, so a resume would silently ignore the new ones."""
+    InputError if it was written with PPO settings other than ``settings``: SB3's checkpoint keeps
+    its own, so a resume would silently ignore the new ones."""
     state_path = directory / CHECKPOINT_STATE
     if not state_path.is_file():
         return None
@@ -231,7 +231,7 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv, settings: PpoSettin
             raise InputError(f"{state_path}: this checkpoint was written without --adr; start a new output folder")
         env.adr.load_state_dict(state["adr"], str(state_path))
     model = PPO.load(zip_path, env=env, device="cpu")
-    if settings is not None and (changed := _changed_settings(model, settings)):
+    if changed := _changed_settings(model, settings):
         raise InputError(
             f"{state_path}: this checkpoint was written with other PPO settings ({'; '.join(changed)}); "
             "give the flags it was written with, or start a new output folder"
@@ -304,10 +304,10 @@ def checkpoint_elapsed(directory: str | os.PathLike[str]) -> dict[str, float]:
 
 
 def resume_or_start(
-    directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any, settings: PpoSettings | None = None
+    directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any, settings: PpoSettings
 ) -> tuple[PPO, bool]:
-    """(model, resumed): the checkpoint in ``directory`` if there is one (written with ``settings``,
-    when given: :func:`load_checkpoint`), else ``start()``'s model."""
+    """(model, resumed): the checkpoint in ``directory`` if there is one (written with ``settings``:
+    :func:`load_checkpoint`), else ``start()``'s model."""
     model = load_checkpoint(Path(directory), env, settings)
     return (model, True) if model is not None else (start(), False)
 

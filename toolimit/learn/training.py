@@ -205,8 +205,8 @@ class LearningConfig:
 
     def settings(self) -> PpoSettings:
         """The PPO settings of the preset, with ``learning_rate`` and ``target_kl`` where given."""
-        given = {field: getattr(self, field) for field in PRESET_OVERRIDES}
-        return replace(PRESETS[self.preset], **{field: value for field, value in given.items() if value is not None})
+        given = {field: value for field in PRESET_OVERRIDES if (value := getattr(self, field)) is not None}
+        return replace(PRESETS[self.preset], **given)
 
     def threads_per_process(self) -> int:
         """``sim_threads``, or when None the cores this process is given
