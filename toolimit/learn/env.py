@@ -25,6 +25,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from toolimit.learn.adr import BOX_OFFSET_UNIT
 from toolimit.learn.shipped import environments, shipped_task
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.task import LearningTask
@@ -44,14 +45,17 @@ def env_id(tool: str, world: str) -> str:
 
 #: Bound of the tool position's coordinates in the observation space, m (far beyond any reach).
 TOOL_POSITION_BOUND = 10.0
+#: Bound of the observed goal box offset under ADR, in its units: any box in the world, from any
+#: aligned position in it. An ADR policy whose space has another bound observed the box otherwise.
+BOX_OFFSET_BOUND = 2 * WORLD_HALF_SIZE / BOX_OFFSET_UNIT
 
 
 def observation_space(simulator: TaskSimulator) -> gym.spaces.Box:
     """float32 box: tool position within +-TOOL_POSITION_BOUND m, quaternion in [-1, 1], joints
-    within their limits (rad), elapsed time in [0, H dt] s (, goal box x, y within the world's
-    +-WORLD_HALF_SIZE m under ADR)."""
+    within their limits (rad), elapsed time in [0, H dt] s (, goal box offset x, y within
+    +-BOX_OFFSET_BOUND units of 0.1 m under ADR)."""
     robot = simulator.robot
-    box = np.full(2 * simulator.adr, WORLD_HALF_SIZE)
+    box = np.full(2 * simulator.adr, BOX_OFFSET_BOUND)
     low = np.concatenate([np.full(3, -TOOL_POSITION_BOUND), -np.ones(4), robot.lower, [0.0], -box])
     high = np.concatenate(
         [np.full(3, TOOL_POSITION_BOUND), np.ones(4), robot.upper, [simulator.horizon * simulator.dt], box]

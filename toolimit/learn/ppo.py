@@ -303,6 +303,17 @@ def checkpoint_elapsed(directory: str | os.PathLike[str]) -> dict[str, float]:
     return {key: float(value) for key, value in json.loads(state_path.read_text()).get("elapsed", {}).items()}
 
 
+def blind_to_goal_box(model: PPO) -> None:
+    """Zero the first layer's weights on the goal box's observation (the last 2 columns under ADR)
+    in the policy and value networks: a clone, which saw the box at offset 0 only, keeps its output
+    there and starts PPO blind to the box elsewhere (:mod:`toolimit.learn.adr`, "What the policy
+    observes")."""
+    extractor = model.policy.mlp_extractor
+    with torch.no_grad():
+        for network in (extractor.policy_net, extractor.value_net):
+            cast(torch.nn.Linear, network[0]).weight[:, -2:] = 0.0
+
+
 def resume_or_start(
     directory: str | os.PathLike[str], env: BatchedTaskVecEnv, start: Any, settings: PpoSettings
 ) -> tuple[PPO, bool]:

@@ -12,8 +12,9 @@ Observation (float32, per instance), the paper's state:
   reset, seconds, as the authors observed it (pyphysx_envs ``RobotEnv.get_obs``: the scene's
   simulation time).
   With ``adr=True`` (domain randomisation of the goal box, :mod:`toolimit.learn.adr`; spades only)
-  two more entries follow: the goal box's position x, y (m, world frame) in this instance, so D =
-  3 + 4 + N + 1 + 2.
+  two more entries follow: the goal box's offset x, y from the aligned position (world frame, in
+  units of 0.1 m: :meth:`AdrBounds.observed <toolimit.learn.adr.AdrBounds.observed>`) in this
+  instance, so D = 3 + 4 + N + 1 + 2.
 Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's velocity limit (SB3 clips
   actions to a symmetric normalised space).
 Reward per step (docs/original_setup.md#robot-environment): (goal reward + velocity penalty) / H, where the penalty is
@@ -62,7 +63,7 @@ REWARDS = ("sparse", "dense")
 
 
 def observation_size(n_joints: int, adr: bool) -> int:
-    """D: tool position 3 + quaternion 4 + joints N + time 1 (+ goal box x, y under ADR)."""
+    """D: tool position 3 + quaternion 4 + joints N + time 1 (+ goal box offset x, y under ADR)."""
     return 3 + 4 + n_joints + 1 + 2 * adr
 
 
@@ -245,9 +246,10 @@ class TaskSimulator:
 
     def observation(self) -> np.ndarray:
         """(B, D) float32: tool position, quaternion (w first), joints, elapsed time t * dt in s (,
-        goal box x, y)."""
+        goal box offset x, y from the aligned position, 0.1 m units)."""
         time = np.full((self.batch_size, 1), self.t * self.dt)
-        parts = [self._position, self._quaternion, self.q, time] + [self.box_positions] * self.adr
+        box = [] if self.adr_bounds is None else [self.adr_bounds.observed(self.box_positions)]
+        parts = [self._position, self._quaternion, self.q, time, *box]
         return np.concatenate(parts, axis=1).astype(np.float32)
 
     # ------------------------------------------------------------------------------------ expert

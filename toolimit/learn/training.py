@@ -28,18 +28,20 @@ from typing import Any, cast
 import numba
 import numpy as np
 import torch
+from gymnasium.spaces import Box
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from tqdm.std import tqdm
 
 from toolimit.artifacts import save_json
-from toolimit.errors import InvalidLearningConfig
+from toolimit.errors import InputError, InvalidLearningConfig
 from toolimit.learn.adr import EVERY as ADR_EVERY
-from toolimit.learn.adr import goal_box_spec
+from toolimit.learn.adr import RULE_VERSION, goal_box_spec
 from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, clone, collect_demonstrations
 from toolimit.learn.early_stop import EarlyStop, StopRule
-from toolimit.learn.evaluate import evaluate
+from toolimit.learn.env import BOX_OFFSET_BOUND
+from toolimit.learn.evaluate import evaluate, observes_goal_box
 from toolimit.learn.kept_policy import KeptPolicy
 from toolimit.learn.ppo import (
     CHECKPOINT_STATE,
@@ -47,6 +49,7 @@ from toolimit.learn.ppo import (
     POLICY_ZIP,
     PRESETS,
     PpoSettings,
+    blind_to_goal_box,
     checkpoint_elapsed,
     make_ppo,
     resume_or_start,
@@ -477,6 +480,8 @@ def _clone(
         seed=config.seed,
         progress=progress,
     )
+    if config.adr:
+        blind_to_goal_box(model)
     check = evaluate(
         model,
         task,
@@ -529,9 +534,17 @@ def _truncate_curve(path: Path, env_steps: int) -> list[dict[str, Any]]:
 
 
 def load_policy(directory: str | Path) -> tuple[PPO, LearningTask]:
-    """The final model and task of a :func:`learn_policy` folder; FileNotFoundError names what is missing."""
+    """The final model and task of a :func:`learn_policy` folder; FileNotFoundError names what is
+    missing, InputError an ADR policy of an earlier observation."""
     directory = Path(directory)
     policy = directory / POLICY_ZIP
     if not policy.is_file():
         raise FileNotFoundError(f"{policy}: no such file (run `toolimit learn` first)")
-    return PPO.load(policy, device="cpu"), LearningTask.load(directory / TASK_NPZ)
+    model, task = PPO.load(policy, device="cpu"), LearningTask.load(directory / TASK_NPZ)
+    space = cast(Box, model.observation_space)
+    if observes_goal_box(model, task) and space.high[-1] != np.float32(BOX_OFFSET_BOUND):
+        raise InputError(
+            f"{policy}: this ADR policy observes the goal box in world metres (before ADR rule {RULE_VERSION}, "
+            "which observes its offset); learn it again"
+        )
+    return model, task
