@@ -15,6 +15,7 @@ from gymnasium.utils.env_checker import check_env
 from toolimit.errors import InputError
 from toolimit.learn import BatchedTaskVecEnv, TaskSimulator, ToolUseEnv, shipped_task
 from toolimit.learn import adr as adr_module
+from toolimit.learn import env as env_module
 from toolimit.learn.adr import (
     DECISION_EPISODES,
     DELTA,
@@ -27,7 +28,8 @@ from toolimit.learn.adr import (
 from toolimit.learn.adr_callback import AdrCallback
 from toolimit.learn.heat_map import HeatMap, goal_box_heat_map
 from toolimit.learn.ppo import CHECKPOINT_STATE
-from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy
+from toolimit.learn.training import CURVE_JSONL, LearningConfig, learn_policy, load_policy
+from toolimit.scenes.base import WORLD_HALF_SIZE
 from toolimit.viz.svg_heat_map import heat_map_svg
 
 TINY = LearningConfig(timesteps=0, envs=2, preset="toolimit", clone_rollouts=2, clone_noise=0.3, clone_steps=20,
@@ -38,20 +40,21 @@ def _parameters(model):
     return torch.cat([p.detach().flatten() for p in model.policy.parameters()]).numpy()
 
 
-def test_observation_holds_each_instance_box_position(spade_task):
+def test_observation_holds_each_instance_box_offset_in_tenths_of_a_metre(spade_task):
     simulator = TaskSimulator(spade_task, batch_size=4, adr=True)
     plain = TaskSimulator(spade_task, batch_size=4)
     aligned = spade_task.params["goal_position"][:2]
     observation = simulator.reset(np.random.default_rng(0))
     assert observation.shape == (4, plain.observation_size + 2) == (4, 3 + 4 + 3 + 1 + 2)
-    np.testing.assert_allclose(observation[:, -2:], np.repeat(aligned[None], 4, 0), atol=1e-6)  # bounds start there
+    np.testing.assert_array_equal(observation[:, -2:], 0.0)  # the bounds start at the aligned box: offset 0
     simulator.adr_bounds.low[0] -= 0.4
     observation = simulator.reset(np.random.default_rng(0))
     x = observation[:, -2]
-    assert len(set(np.round(x, 6))) == 4, "one position per instance"
-    assert np.all((x >= aligned[0] - 0.4 - 1e-6) & (x <= aligned[0] + 1e-6))
-    np.testing.assert_allclose(x, simulator.scene.goal_x, atol=1e-6)  # the scene's boxes are where observed
+    assert len(set(np.round(x, 5))) == 4, "one position per instance"
+    assert np.all((x >= -4.0 - 1e-5) & (x <= 1e-5)) and x.min() < -1.0, "0.4 m below the aligned box is -4 units"
+    np.testing.assert_allclose(x, (simulator.scene.goal_x - aligned[0]) / 0.1, atol=1e-5)  # where the boxes stand
     np.testing.assert_array_equal(observation[:, -1], 0.0)  # the planar box has no y: not randomised
+    np.testing.assert_array_equal(observation[:, :-2], plain.reset(np.random.default_rng(0)))  # the rest as without ADR
 
 
 def test_a_tool_without_goal_box_is_refused_in_one_line():
@@ -356,6 +359,37 @@ def cloned_adr_policy(spade_task, tmp_path_factory):
     """Cloned (no PPO) from 4 tracking rollouts at the aligned box, observing it."""
     config = LearningConfig(**{**TINY.__dict__, "clone_rollouts": 4, "clone_steps": 1500, "value_steps": 0})
     return learn_policy(spade_task, tmp_path_factory.mktemp("adr_policy"), config, progress=False).model
+
+
+def test_the_clone_starts_blind_to_the_box(spade_task, cloned_adr_policy):
+    """After cloning, the first layer's weights on the box offset are 0 in both networks (the others
+    not), so the clone's action and value at the aligned box (offset 0, where it was cloned) are
+    its action and value wherever the box stands."""
+    extractor = cloned_adr_policy.policy.mlp_extractor
+    for network in (extractor.policy_net, extractor.value_net):
+        assert torch.count_nonzero(network[0].weight[:, -2:]) == 0
+        assert torch.count_nonzero(network[0].weight[:, :-2]) > 0
+    at_aligned = TaskSimulator(spade_task, batch_size=2, adr=True).reset(np.random.default_rng(0))
+    elsewhere = at_aligned.copy()
+    elsewhere[:, -2] = [-3.0, 2.5]
+
+    def output(observation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        action, _ = cloned_adr_policy.predict(observation, deterministic=True)
+        with torch.no_grad():
+            return action, cloned_adr_policy.policy.predict_values(torch.as_tensor(observation)).numpy()
+
+    for ours, theirs in zip(output(at_aligned), output(elsewhere), strict=True):
+        np.testing.assert_array_equal(ours, theirs)
+
+
+def test_a_policy_that_observed_the_box_in_world_metres_is_refused_in_one_line(spade_task, tmp_path, monkeypatch):
+    """An ADR policy learned before rule 3 has the box in +-5 m in its observation space."""
+    monkeypatch.setattr(env_module, "BOX_OFFSET_BOUND", WORLD_HALF_SIZE)
+    learn_policy(spade_task, tmp_path, TINY, progress=False)
+    monkeypatch.undo()
+    with pytest.raises(InputError, match="observes the goal box in world metres") as error:
+        load_policy(tmp_path)
+    assert str(tmp_path / "policy.zip") in str(error.value) and "\n" not in str(error.value)
 
 
 def test_heat_map_values_come_from_rollouts_and_the_svg_has_one_cell_per_grid_point(spade_task, cloned_adr_policy):
