@@ -14,6 +14,7 @@ from toolimit.artifacts import load_npz, save_npz
 from toolimit.cli import main as toolimit
 from toolimit.learn.task import LearningTask, TaskFileError, task_from_pipeline
 from toolimit.pipeline import PipelineSettings, TrajectoryStage, align_stage, trajopt_from_poses, trajopt_stage
+from toolimit.pipeline import shortlist as shortlist_module
 from toolimit.pipeline import stages as stages_module
 from toolimit.pipeline.settings import with_values
 from toolimit.pipeline.shortlist import (
@@ -23,8 +24,10 @@ from toolimit.pipeline.shortlist import (
     can_fall_back_on,
     read_shortlist,
     shortlist_folder,
+    shortlist_in_learning_task,
 )
 from toolimit.pipeline.stages import CLONE_ATTEMPTS_JSON, learn_stage
+from toolimit.robots import make_robot
 from toolimit.trajopt.result import TrajectoryResult
 
 REPO = Path(__file__).resolve().parents[1]
@@ -77,6 +80,22 @@ def test_the_shortlist_is_the_best_robot_replays_tracked_in_their_learning_tasks
     record = json.loads((out / "trajectory" / "selection.json").read_text())
     assert record["shortlist"] == [entry.record() for entry in kept.shortlist]
     assert all(0.0 <= entry.success_rate <= 1.0 for entry in kept.shortlist)
+
+
+def test_the_shortlist_tracks_with_the_learners_action_limit(stages, monkeypatch) -> None:
+    _, kept = stages
+    assert kept.selection is not None
+    limits = []
+    collect = shortlist_module.collect_demonstrations
+
+    def tracked(task: LearningTask, **kwargs):
+        limits.append(task.action_limit)
+        return collect(task, **kwargs)
+
+    monkeypatch.setattr(shortlist_module, "collect_demonstrations", tracked)
+    robot = make_robot("planar3", tool="spade")
+    shortlist_in_learning_task(kept.selection, kept.candidates, robot, "spade", "planar", 1, 2, 0, False, 3.0)
+    assert limits == [3.0]
 
 
 def test_the_kept_candidate_is_the_most_often_successful_tracking_then_the_robot_order() -> None:

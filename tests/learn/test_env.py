@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -72,6 +74,29 @@ def test_action_is_a_fraction_of_the_velocity_limit_and_joints_stay_in_limits(sp
     for _ in range(60):
         env.step(np.ones(simulator.n_joints, dtype=np.float32))
     assert np.all(simulator.q[0] <= simulator.robot.upper + 1e-12)
+
+
+def test_an_action_limit_scales_the_action_and_the_penalty_stays_at_the_robots_limits(spade_task):
+    """The authors' clip (3 rad/s on every joint): an action of 1 commands 3 rad/s, beyond the
+    robot's limits, and is penalised above 0.9 of the robot's own limits; the tracking controller
+    commands the same velocities, clipped at the action limit instead of the robot's."""
+    authors = TaskSimulator(dataclasses.replace(spade_task, action_limit=3.0), batch_size=2)
+    plain = TaskSimulator(spade_task, batch_size=2)
+    limit = authors.robot.velocity_limit
+    assert np.all(limit < 3.0) and np.array_equal(plain.action_scale, limit)
+    np.testing.assert_array_equal(authors.action_scale, np.full(authors.n_joints, 3.0))
+    for simulator in (authors, plain):
+        simulator.reset(np.random.default_rng(0))
+    commanded = authors.tracking_action() * 3.0  # rad/s; the robot's limits clip more of it
+    np.testing.assert_allclose(np.clip(commanded, -limit, limit), plain.tracking_action() * limit)
+    before = authors.q.copy()
+    _, reward, goal = authors.step(np.full((2, authors.n_joints), 0.1))
+    np.testing.assert_allclose(authors.q, np.clip(before + 0.3 * authors.dt, authors.robot.lower, authors.robot.upper))
+    np.testing.assert_allclose(reward * authors.horizon, goal, err_msg="0.3 rad/s is far below 0.9 of the limits")
+    _, reward, goal = authors.step(np.ones((2, authors.n_joints)))
+    penalty = velocity_penalty(np.full((2, authors.n_joints), 3.0), limit)
+    assert np.all(penalty < 0)
+    np.testing.assert_allclose(reward * authors.horizon, goal + penalty)
 
 
 def test_velocity_penalty_only_above_ninety_percent_of_the_limit():

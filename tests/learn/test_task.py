@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -33,6 +35,17 @@ def test_load_names_the_problem(spade_task, tmp_path):
     np.savez(tmp_path / "partial.npz", tool="spade")
     with pytest.raises(TaskFileError, match="missing keys"):
         LearningTask.load(tmp_path / "partial.npz")
+
+
+def test_the_action_limit_is_saved_and_checked(spade_task, tmp_path):
+    assert LearningTask.load(spade_task.save(tmp_path / "robot.npz")).action_limit is None
+    authors = dataclasses.replace(spade_task, action_limit=3.0)
+    assert LearningTask.load(authors.save(tmp_path / "authors.npz")).action_limit == 3.0
+    arrays = dict(np.load(tmp_path / "authors.npz")) | {"action_limit": np.float64(0.0)}
+    np.savez(tmp_path / "zero.npz", **arrays)
+    with pytest.raises(TaskFileError) as refused:
+        LearningTask.load(tmp_path / "zero.npz")
+    assert str(refused.value) == f"{tmp_path / 'zero.npz'}: action_limit must be a finite number > 0 (rad/s), got 0.0"
 
 
 def test_every_registered_pair_has_a_shipped_task():

@@ -12,7 +12,7 @@ import pytest
 import torch
 
 from toolimit.errors import InputError, InvalidLearningConfig
-from toolimit.learn import BatchedTaskVecEnv, shipped_task, training
+from toolimit.learn import BatchedTaskVecEnv, LearningTask, shipped_task, training
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.ppo import PRESETS, make_ppo
 from toolimit.learn.training import CLONE_CHECK_EPISODES, CURVE_JSONL, LearningConfig, learn_policy, load_policy
@@ -145,6 +145,24 @@ def test_a_checkpoint_is_not_resumed_with_other_ppo_settings(spade_task, tmp_pat
     assert written() == before
 
 
+def test_the_action_limit_is_learnt_kept_with_the_policy_and_not_changed_on_resume(spade_task, tmp_path):
+    """The learnt task keeps the action limit, so that the policy is rolled out as it learnt; a
+    resume with another limit is refused in one line."""
+    per_update = spade_task.horizon * 2
+    authors = LearningConfig(**{**TINY.__dict__, "timesteps": per_update, "action_limit": 3.0})
+    learn_policy(spade_task, tmp_path, authors, progress=False)
+    model, task = load_policy(tmp_path)
+    assert task.action_limit == 3.0 and spade_task.action_limit is None
+    robot_limits = LearningConfig(**{**TINY.__dict__, "timesteps": 2 * per_update})
+    with pytest.raises(InputError) as refused:
+        learn_policy(spade_task, tmp_path, robot_limits, progress=False)
+    assert str(refused.value) == (
+        f"{tmp_path / 'task.npz'}: this checkpoint was learnt with --action-limit 3; "
+        "give it again or start a new output folder"
+    )
+    assert LearningTask.load(tmp_path).action_limit == 3.0, "the refused run leaves the task as it was"
+
+
 def test_evaluation_refuses_zero_episodes(spade_task):
     model = make_ppo(BatchedTaskVecEnv(spade_task, 2, seed=0), PRESETS["toolimit"], seed=0)
     with pytest.raises(InputError, match="^episodes must be >= 1, got 0$"):
@@ -186,6 +204,7 @@ def test_target_kl_stops_an_update_after_its_first_minibatch_step(spade_task, tm
         ("torch_threads", 0, "torch_threads: must be an integer >= 1, got 0"),
         ("clone_noise", float("nan"), "clone_noise: must be a finite number >= 0, got nan"),
         ("action_std", 0.0, "action_std: must be a finite number > 0 (rad/s), got 0.0"),
+        ("action_limit", -3.0, "action_limit: must be a finite number > 0 (rad/s), got -3.0"),
         ("target_kl", 0.0, "target_kl: must be a finite number > 0, got 0.0"),
         ("learning_rate", float("inf"), "learning_rate: must be a finite number > 0, got inf"),
         ("reward", "shaped", "reward: unknown reward 'shaped'; choose one of sparse, dense"),

@@ -50,6 +50,7 @@ LEARNING_FLAGS = (
     Flag("clone_steps"),
     Flag("value_steps"),
     Flag("action_std"),
+    Flag("action_limit", show=lambda limit: "the robot's velocity limits" if limit is None else str(limit)),
     Flag("reward", choices=REWARDS),
     Flag("adr"),
     Flag("adr_every"),

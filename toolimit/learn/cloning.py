@@ -38,7 +38,7 @@ class Demonstrations:
 
     Attributes:
         observations: (M, D) float32 observations (see :mod:`toolimit.learn.simulator`).
-        actions: (M, N) float32 controller actions in [-1, 1] (fractions of the velocity limits).
+        actions: (M, N) float32 controller actions in [-1, 1] (fractions of the action scale).
         returns: (M,) float32 discounted return from each state to the episode's end.
         goal_rewards: (E,) final goal reward of each rollout; successes: (E,) bool.
         env_steps: environment steps simulated (M).
@@ -124,10 +124,11 @@ def fix_action_std(policy: ActorCriticPolicy, std: np.ndarray) -> None:
     policy.log_std.requires_grad_(False)
 
 
-def normalised_action_std(velocity_limit: np.ndarray, std: float = AUTHORS_ACTION_STD) -> np.ndarray:
+def normalised_action_std(action_scale: np.ndarray, std: float = AUTHORS_ACTION_STD) -> np.ndarray:
     """(N,) a joint-velocity standard deviation ``std`` (rad/s; the authors' 0.2 by default) as a
-    fraction of each joint's velocity limit (rad/s), the policy's action units."""
-    return std / np.asarray(velocity_limit, dtype=float)
+    fraction of each joint's action scale (rad/s, ``TaskSimulator.action_scale``), the policy's
+    action units."""
+    return std / np.asarray(action_scale, dtype=float)
 
 
 @dataclass(frozen=True)

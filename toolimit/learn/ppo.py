@@ -120,7 +120,7 @@ def make_ppo(
     """A PPO model on ``env`` with the paper's policy; its standard deviation is ``action_std``
     rad/s (the authors' 0.2) on every joint, frozen unless ``learn_std`` (the baselines without
     cloning)."""
-    std = normalised_action_std(env.simulator.robot.velocity_limit, action_std)
+    std = normalised_action_std(env.simulator.action_scale, action_std)
     n_steps = settings.episodes_per_update * env.simulator.horizon
     model = PPO(
         "MlpPolicy",
@@ -158,7 +158,7 @@ class _StdFloor(BaseCallback):
     def _clamp(self) -> None:
         log_std = cast(torch.Tensor, self.model.policy.log_std)
         if log_std.requires_grad:
-            floor = np.log(STD_FLOOR / cast(BatchedTaskVecEnv, self.training_env).simulator.robot.velocity_limit)
+            floor = np.log(STD_FLOOR / cast(BatchedTaskVecEnv, self.training_env).simulator.action_scale)
             with torch.no_grad():
                 log_std.copy_(torch.maximum(log_std, torch.as_tensor(floor, dtype=torch.float32)))
 

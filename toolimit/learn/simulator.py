@@ -15,12 +15,18 @@ Observation (float32, per instance), the paper's state:
   two more entries follow: the goal box's offset x, y from the aligned position (world frame, in
   units of 0.1 m: :meth:`AdrBounds.observed <toolimit.learn.adr.AdrBounds.observed>`) in this
   instance, so D = 3 + 4 + N + 1 + 2.
-Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's velocity limit (SB3 clips
-  actions to a symmetric normalised space).
+Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's action scale (SB3 clips
+  actions to a symmetric normalised space): the robot's velocity limit, or the task's
+  ``action_limit`` on every joint (rad/s). The authors' environment clips the commanded
+  velocities at 3 rad/s (pyphysx_envs ``RobotEnv.step``), beyond the Panda's own limits (2.175 and
+  2.61 rad/s), and only penalises the excess; the project's tasks clip at the robot's limits unless
+  given the authors' (``toolimit learn --action-limit 3``), so that a learnt motion runs on the arm
+  as it was learnt.
 Reward per step (docs/original_setup.md#robot-environment): (goal reward + velocity penalty) / H, where the penalty is
   -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) (rad/s, w = 0.01) on the joint velocity
-  v. The authors' weight grew by 1e-4 per reset; here it is constant, so that a state earns the
-  same return whatever the number of episodes before it. With ``reward="dense"`` (the paper's
+  v, v_max the robot's own limits whatever the action scale. The authors' weight grew by 1e-4 per
+  reset; here it is constant, so that a state earns the same return whatever the number of
+  episodes before it. With ``reward="dense"`` (the paper's
   dense-reward baseline) the scene's dense shaping (the appendix's, ``Scene.dense_reward``) is
   added to the goal reward: the shaping guides, the goal reward still counts what succeeds.
 Reset noise (the authors'): start joints = reference start + N(0, 0.01) rad each; every position
@@ -113,6 +119,10 @@ class TaskSimulator:
             )
         self.scene_kwargs = scene_kwargs
         self.n_joints = len(task.joint_names)
+        #: (N,) rad/s: the joint velocity of an action of 1 (module docstring).
+        self.action_scale = (
+            self.robot.velocity_limit if task.action_limit is None else np.full(self.n_joints, task.action_limit)
+        )
         self.adr = adr
         self.observation_size = observation_size(self.n_joints, adr)
         #: The ADR bounds the goal box is drawn in (None without ADR); AdrCallback moves them.
@@ -217,7 +227,7 @@ class TaskSimulator:
         """Apply actions (B, N) in [-1, 1]; returns observations (B, D), rewards (B,) and goal
         rewards (B,) after the step."""
         actions = np.asarray(actions, dtype=float).reshape(self.batch_size, self.n_joints)
-        velocity = np.clip(actions, -1.0, 1.0) * self.robot.velocity_limit
+        velocity = np.clip(actions, -1.0, 1.0) * self.action_scale
         self.q = np.clip(self.q + velocity * self.dt, self.robot.lower, self.robot.upper)
         self._update_tool()
         self.scene.step(ToolPose(self._position, self._rotation))
@@ -256,12 +266,12 @@ class TaskSimulator:
     def tracking_action(self, q: np.ndarray | None = None) -> np.ndarray:
         """(B, N) the tracking controller's action, the authors' expert for cloning: the velocity
         that reaches the reference's next configuration in one step, (q_ref[t+1] - q_t) / dt,
-        as a fraction of the velocity limit and clipped to [-1, 1]; the reference's last
+        as a fraction of the action scale and clipped to [-1, 1]; the reference's last
         configuration is held after its end. ``q``: joints (M, N) rad at this step instead of the
         simulator's own (a batch split over processes)."""
         target = self.task.reference_q[min(self.t + 1, self.task.reference_steps)]
         q = self.q if q is None else q
-        return np.clip((target - q) / (self.dt * self.robot.velocity_limit), -1.0, 1.0)
+        return np.clip((target - q) / (self.dt * self.action_scale), -1.0, 1.0)
 
 
 def velocity_penalty(velocity: np.ndarray, limit: np.ndarray) -> np.ndarray:

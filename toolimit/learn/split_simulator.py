@@ -137,6 +137,7 @@ class SplitSimulator:
         self.local = TaskSimulator(task, part=parts[0], **options)
         self.task, self.batch_size, self.parts = task, batch_size, parts
         self.robot, self.n_joints, self.horizon = self.local.robot, self.local.n_joints, self.local.horizon
+        self.action_scale = self.local.action_scale
         self.observation_size, self.adr, self.dt = self.local.observation_size, adr, self.local.dt
         self.scene_kwargs, self.reward = scene_kwargs, reward
         context = multiprocessing.get_context("spawn")

@@ -56,6 +56,9 @@ class LearningTask:
         control_dt: seconds per control step (the scene's, 1/24 s).
         time_scale: slow-down of the demonstration the trajectory was optimised at (1 = real time).
         source: where the task came from (folders, candidate index), for reports.
+        action_limit: every joint's commanded speed is clipped at this many rad/s (the authors'
+            environment: 3) instead of the robot's own velocity limits (None); speeds above 0.9 of
+            the robot's limits are penalised either way (:mod:`toolimit.learn.simulator`).
     """
 
     tool: str
@@ -69,6 +72,11 @@ class LearningTask:
     control_dt: float
     time_scale: float
     source: dict[str, str] = field(default_factory=dict)
+    action_limit: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.action_limit is not None and not 0.0 < self.action_limit < float("inf"):
+            raise ValueError(f"action_limit must be a finite number > 0 (rad/s), got {self.action_limit!r}")
 
     @property
     def reference_steps(self) -> int:
@@ -89,6 +97,8 @@ class LearningTask:
             "control_dt": np.float64(self.control_dt),
             "time_scale": np.float64(self.time_scale),
         }
+        if self.action_limit is not None:
+            arrays["action_limit"] = np.float64(self.action_limit)
         arrays |= pack_scene_params(self.params)
         arrays |= {f"source_{key}": np.str_(value) for key, value in self.source.items()}
         save_npz(path, **arrays)
@@ -116,19 +126,23 @@ class LearningTask:
             )
         params = unpack_scene_params(data)
         source = {key.removeprefix("source_"): str(value) for key, value in data.items() if key.startswith("source_")}
-        return cls(
-            tool=str(data["tool"]),
-            world=str(data["world"]),
-            robot=str(data["robot"]),
-            joint_names=joint_names,
-            params=params,
-            base=base,
-            reference_q=reference_q,
-            horizon=horizon,
-            control_dt=float(data["control_dt"]),
-            time_scale=float(data["time_scale"]),
-            source=source,
-        )
+        try:
+            return cls(
+                tool=str(data["tool"]),
+                world=str(data["world"]),
+                robot=str(data["robot"]),
+                joint_names=joint_names,
+                params=params,
+                base=base,
+                reference_q=reference_q,
+                horizon=horizon,
+                control_dt=float(data["control_dt"]),
+                time_scale=float(data["time_scale"]),
+                source=source,
+                action_limit=float(data["action_limit"]) if "action_limit" in data else None,
+            )
+        except ValueError as invalid:  # __post_init__'s check of a value
+            raise TaskFileError(f"{path}: {invalid}") from None
 
 
 def success_horizon(
@@ -163,8 +177,10 @@ def task_from_trajectory(
     scene: Scene,
     seed: int = 0,
     source: dict[str, str] | None = None,
+    action_limit: float | None = None,
 ) -> LearningTask:
-    """The task of ``trajectory`` (stage iii's result for ``robot``) in ``scene`` with ``params``.
+    """The task of ``trajectory`` (stage iii's result for ``robot``) in ``scene`` with ``params``,
+    its actions clipped at ``action_limit`` rad/s (None: the robot's own limits).
 
     Raises ValueError if the trajectory is another robot's.
     """
@@ -187,6 +203,7 @@ def task_from_trajectory(
         control_dt=scene.control_dt,
         time_scale=trajectory.time_scale,
         source=dict(source or {}),
+        action_limit=action_limit,
     )
 
 

@@ -93,12 +93,16 @@ class LearningConfig:
         clone: behaviour cloning before PPO (without it: PPO from a random policy with a learned std, the
             sparse-reward baseline).
         clone_rollouts: tracking-controller rollouts to clone (1 = the authors' single rollout).
-        clone_noise: std of the action noise of rollouts 2.. (fraction of the velocity limit), each
+        clone_noise: std of the action noise of rollouts 2.. (fraction of the action scale), each
             noisy state relabelled with the controller's action.
         clone_steps: Adam steps of cloning.
         value_steps: Adam steps of the value network's warm-up after cloning.
         action_std: the policy's standard deviation on every joint, rad/s (fixed after cloning,
             the start of the learned one without).
+        action_limit: every joint's commanded speed is clipped at this many rad/s (the authors': 3,
+            beyond the Panda's limits) instead of the robot's own velocity limits (None); the
+            penalty above 0.9 of the robot's limits stays. The learnt task (OUT/task.npz) keeps
+            it, so that evaluation and export roll the policy out as it learnt.
         checkpoint_every: updates between checkpoints.
         seed: seeds everything (environments, torch, PPO).
         scene_kwargs: the scene's constructor arguments.
@@ -142,6 +146,7 @@ class LearningConfig:
     clone_steps: int = 6000
     value_steps: int = 2000
     action_std: float = AUTHORS_ACTION_STD
+    action_limit: float | None = None
     checkpoint_every: int = 5
     seed: int = 0
     scene_kwargs: dict[str, Any] | None = None
@@ -182,6 +187,10 @@ class LearningConfig:
                 raise InvalidLearningConfig(field, f"must be a finite number > 0, got {value!r}")
         if not 0.0 < self.action_std < float("inf"):
             raise InvalidLearningConfig("action_std", f"must be a finite number > 0 (rad/s), got {self.action_std!r}")
+        if self.action_limit is not None and not 0.0 < self.action_limit < float("inf"):
+            raise InvalidLearningConfig(
+                "action_limit", f"must be a finite number > 0 (rad/s), got {self.action_limit!r}"
+            )
         if not isinstance(self.sim_processes, numbers.Integral) or not 1 <= self.sim_processes <= self.envs:
             raise InvalidLearningConfig(
                 "sim_processes", f"must be an integer in 1..envs ({self.envs}), got {self.sim_processes!r}"
@@ -366,6 +375,8 @@ def _learn_policy(
 ) -> LearningOutcome:
     started = time.perf_counter()
     settings = config.settings()
+    task = replace(task, action_limit=config.action_limit)
+    _check_action_limit(out_dir, task)
     if config.adr:  # a scene without a goal box to move is refused before anything is written
         goal_box_spec(make_scene(task.tool, task.world))
     torch.manual_seed(config.seed)
@@ -450,6 +461,19 @@ def _learn_policy(
         record["adr"] = env.adr.record(config.adr_every)
     save_json(out_dir / LEARNING_JSON, record)
     return LearningOutcome(policy, out_dir, record)
+
+
+def _check_action_limit(out_dir: Path, task: LearningTask) -> None:
+    """InputError when ``out_dir`` holds a checkpoint learnt with another action limit than
+    ``task``'s: a resume would roll the policy out at another scale than it learnt."""
+    if not (out_dir / CHECKPOINT_STATE).is_file() or not (out_dir / TASK_NPZ).is_file():
+        return
+    learnt = LearningTask.load(out_dir / TASK_NPZ).action_limit
+    if learnt != task.action_limit:
+        given = "the robot's limits" if learnt is None else f"--action-limit {learnt:g}"
+        raise InputError(
+            f"{out_dir / TASK_NPZ}: this checkpoint was learnt with {given}; give it again or start a new output folder"
+        )
 
 
 def _clone(

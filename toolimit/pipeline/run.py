@@ -158,7 +158,11 @@ def run_stages(
             lines = describe_alignment(result)
         elif stage == "trajectory":
             made = _timed(
-                out, stage, lambda: trajopt_stage(alignment, robot, trajectory, settings.trajopt, progress, tool, ray)
+                out,
+                stage,
+                lambda: trajopt_stage(
+                    alignment, robot, trajectory, settings.trajopt, progress, tool, ray, settings.learning.action_limit
+                ),
             )
             lines = describe_trajectory(made)
         else:

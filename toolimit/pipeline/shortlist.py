@@ -99,10 +99,11 @@ def shortlist_in_learning_task(
     episodes: int,
     seed: int,
     progress: bool = True,
+    action_limit: float | None = None,
 ) -> list[ShortlistEntry]:
     """The ``size`` candidates with the highest robot reward (> 0), best first, each tracked in its
-    learning task (built with ``seed``, as the learner's) for ``episodes`` episodes seeded by
-    :data:`SHORTLIST_SEED` + ``seed``; see the module docstring."""
+    learning task (built with ``seed`` and ``action_limit``, rad/s, as the learner's) for
+    ``episodes`` episodes seeded by :data:`SHORTLIST_SEED` + ``seed``; see the module docstring."""
     rewards = np.nan_to_num(selection.robot_rewards, nan=0.0)
     ranked = sorted((k for k in range(len(candidates)) if rewards[k] > 0), key=lambda k: -rewards[k])[:size]
     scene = make_scene(tool, world)
@@ -110,7 +111,9 @@ def shortlist_in_learning_task(
     for k in progress_bar(ranked, desc="tracking in the learning task", unit="candidate", disable=not progress):
         trajectory = selection.trajectories[k]
         assert trajectory is not None  # a candidate with a robot reward was tracked
-        task = task_from_trajectory(trajectory, world, candidates[k].params, robot, scene, seed)
+        task = task_from_trajectory(
+            trajectory, world, candidates[k].params, robot, scene, seed, action_limit=action_limit
+        )
         tracked = collect_demonstrations(task, rollouts=episodes, action_noise=0.0, seed=SHORTLIST_SEED + seed)
         entries.append(
             ShortlistEntry(

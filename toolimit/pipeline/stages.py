@@ -159,6 +159,7 @@ def trajopt_stage(
     progress: bool = True,
     tool: str | None = None,
     ray: RayTarget = False,
+    action_limit: float | None = None,
 ) -> TrajectoryStage:
     """Stage iii from an alignment folder: with ``settings.select_by_robot``, every candidate is
     tracked by ``robot`` and replayed in its scene, the ``settings.shortlist`` whose replays earn
@@ -168,7 +169,8 @@ def trajopt_stage(
     Writes ``out/trajectory.npz``/``.json``, which record the candidate. ``ray``: the candidates
     tracked on a Ray cluster (:data:`~toolimit.distributed.RayTarget`). InputError when ``tool``
     is given and the alignment is another tool's; StageFoundNothing when no robot replay earns a
-    reward."""
+    reward. ``action_limit``: the learner's (:attr:`LearningConfig.action_limit
+    <toolimit.learn.training.LearningConfig.action_limit>`), for the shortlist's learning tasks."""
     out = Path(out)
     aligned_tool, world, candidates = load_candidates(alignment)
     if tool is not None and tool != aligned_tool:
@@ -207,6 +209,7 @@ def trajopt_stage(
                 settings.shortlist_episodes,
                 settings.seed,
                 progress,
+                action_limit,
             )
             kept = best_to_learn(shortlist).candidate
             record["shortlist"] = [entry.record() for entry in shortlist]
