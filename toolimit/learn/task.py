@@ -41,6 +41,13 @@ class TaskFileError(InputError):
     """A task file that is missing or malformed; the message names the file and the problem."""
 
 
+def action_limit_problem(limit: float | None) -> str | None:
+    """Why ``limit`` (rad/s) cannot be a task's action limit, or None when it can (None included)."""
+    if limit is None or 0.0 < limit < float("inf"):
+        return None
+    return f"must be a finite number > 0 (rad/s), got {limit!r}"
+
+
 @dataclass(frozen=True)
 class LearningTask:
     """The start of stage iv: robot, scene and reference motion.
@@ -75,8 +82,8 @@ class LearningTask:
     action_limit: float | None = None
 
     def __post_init__(self) -> None:
-        if self.action_limit is not None and not 0.0 < self.action_limit < float("inf"):
-            raise ValueError(f"action_limit must be a finite number > 0 (rad/s), got {self.action_limit!r}")
+        if problem := action_limit_problem(self.action_limit):
+            raise ValueError(f"action_limit {problem}")
 
     @property
     def reference_steps(self) -> int:

@@ -56,7 +56,7 @@ from toolimit.learn.ppo import (
     train,
 )
 from toolimit.learn.simulator import REWARDS
-from toolimit.learn.task import TASK_NPZ, LearningTask
+from toolimit.learn.task import TASK_NPZ, LearningTask, action_limit_problem
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 from toolimit.progress import progress_bar
 from toolimit.scenes.registry import make_scene, scene_class
@@ -187,10 +187,8 @@ class LearningConfig:
                 raise InvalidLearningConfig(field, f"must be a finite number > 0, got {value!r}")
         if not 0.0 < self.action_std < float("inf"):
             raise InvalidLearningConfig("action_std", f"must be a finite number > 0 (rad/s), got {self.action_std!r}")
-        if self.action_limit is not None and not 0.0 < self.action_limit < float("inf"):
-            raise InvalidLearningConfig(
-                "action_limit", f"must be a finite number > 0 (rad/s), got {self.action_limit!r}"
-            )
+        if problem := action_limit_problem(self.action_limit):
+            raise InvalidLearningConfig("action_limit", problem)
         if not isinstance(self.sim_processes, numbers.Integral) or not 1 <= self.sim_processes <= self.envs:
             raise InvalidLearningConfig(
                 "sim_processes", f"must be an integer in 1..envs ({self.envs}), got {self.sim_processes!r}"
