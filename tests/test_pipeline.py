@@ -23,6 +23,7 @@ from toolimit.pipeline.shortlist import (
     best_to_learn,
     can_fall_back_on,
     read_shortlist,
+    shortlist_action_limit,
     shortlist_folder,
     shortlist_in_learning_task,
 )
@@ -96,6 +97,18 @@ def test_the_shortlist_tracks_with_the_learners_action_limit(stages, monkeypatch
     robot = make_robot("planar3", tool="spade")
     shortlist_in_learning_task(kept.selection, kept.candidates, robot, "spade", "planar", 1, 2, 0, False, 3.0)
     assert limits == [3.0]
+
+
+def test_the_selection_records_the_span_its_shortlist_was_tracked_with(
+    stages, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out, kept = stages
+    assert shortlist_action_limit(out / "trajectory") is None, "tracked within the robot's limits"
+    monkeypatch.setattr(stages_module, "select_by_robot_execution", lambda *args, **kwargs: kept.selection)
+    settings = dataclasses.replace(QUICK.trajopt, shortlist=1)
+    trajopt_stage(out / "alignment", "planar3", tmp_path, settings, progress=False, action_limit=3.0)
+    assert json.loads((tmp_path / "selection.json").read_text())["shortlist_action_limit"] == 3.0
+    assert shortlist_action_limit(tmp_path) == 3.0
 
 
 def test_the_kept_candidate_is_the_most_often_successful_tracking_then_the_robot_order() -> None:
@@ -261,3 +274,7 @@ def test_the_command_writes_every_stage_resumes_and_refuses_another_robot(
     assert toolimit(other) == 2
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and "holds a finished stage for robot 'planar3', not 'panda'" in error
+    assert toolimit([*argv, "--action-limit", "3"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0
+    assert "shortlist was tracked with an action limit of the robot's limits, not 3 rad/s" in error

@@ -99,6 +99,8 @@ def test_poses_and_auto_time_scale(tmp_path):
         (["--seed", "-3"], "--seed"),
         (["--velocity-weight", "-1"], "--velocity-weight"),
         (["--rerun", "view.txt"], "--rerun"),
+        (["--action-limit", "0"], "--action-limit"),
+        (["--action-limit", "3"], "--action-limit: only with --alignment"),
     ],
 )
 def test_bad_options_are_user_errors(capsys, tmp_path, extra, fragment):

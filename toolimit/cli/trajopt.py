@@ -4,7 +4,8 @@ The command line of :func:`toolimit.pipeline.trajopt_stage` (from an alignment f
 candidate tracked and replayed, the best kept, ``OUT/selection.json``) and
 :func:`toolimit.pipeline.trajopt_from_poses` (a poses file: ``tip_position`` (T, 3),
 ``tip_quaternion_wxyz`` (T, 4), ``fps``; toolimit's tool-frame convention); the flags are the
-fields of :class:`toolimit.pipeline.TrajoptSettings`, with the same defaults as ``toolimit run``.
+fields of :class:`toolimit.pipeline.TrajoptSettings`, with the same defaults as ``toolimit run``, and
+``--action-limit``, the learner's (``toolimit learn``), for the learning tasks the shortlist tracks in.
 Output: ``OUT/trajectory.npz`` and ``OUT/trajectory.json`` (see :mod:`toolimit.trajopt.result`).
 Exit codes: 0 done, 1 no candidate's robot replay earned a reward, 2 bad input (nothing written).
 """
@@ -27,6 +28,8 @@ from toolimit.cli import (
     load_poses,
 )
 from toolimit.cli.flags import Flag, add_flags, apply_flags, show_workers
+from toolimit.cli.learn import LEARNING_FLAGS
+from toolimit.learn.training import LearningConfig
 from toolimit.pipeline.settings import INIT_CHOICES, TrajoptSettings
 
 
@@ -65,6 +68,9 @@ TRAJOPT_FLAGS = (
     Flag("seed"),
     Flag("workers", show=show_workers),
 )
+#: The learner's action limit (a field of :class:`~toolimit.learn.training.LearningConfig`): the
+#: shortlist tracks its candidates in the learning task the learner will build, with its span.
+SHORTLIST_SPAN_FLAGS = tuple(flag for flag in LEARNING_FLAGS if flag.path == "action_limit")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -83,6 +89,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_frame_argument(parser)
     add_out_argument(parser)
     add_flags(parser, TRAJOPT_FLAGS, {"": TrajoptSettings()})
+    add_flags(parser, SHORTLIST_SPAN_FLAGS, {"": LearningConfig()})
     parser.add_argument("--rerun", type=Path, default=None, help="also save a rerun recording (.rrd) here")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
@@ -98,6 +105,9 @@ def run(args: argparse.Namespace) -> int:
     check_choice("--robot", args.robot, ROBOTS, "robot")
     check_choice("--tool", args.tool, sorted(TOOLS), "tool")
     settings = apply_flags(TrajoptSettings(), TRAJOPT_FLAGS, args)
+    action_limit = apply_flags(LearningConfig(), SHORTLIST_SPAN_FLAGS, args).action_limit
+    if action_limit is not None and args.poses is not None:
+        raise CliError("--action-limit: only with --alignment (the span of the shortlist's tracking)")
     check_output_folder(args.out, "--out")
     check_output_file(args.rerun, "--rerun", ".rrd")
     with warnings.catch_warnings(record=True) as caught:
@@ -105,7 +115,9 @@ def run(args: argparse.Namespace) -> int:
         if args.alignment is not None:
             if not args.alignment.is_dir():
                 raise CliError(f"--alignment: no such folder: {args.alignment}")
-            stage = trajopt_stage(args.alignment, args.robot, args.out, settings, not args.quiet, args.tool)
+            stage = trajopt_stage(
+                args.alignment, args.robot, args.out, settings, not args.quiet, args.tool, action_limit=action_limit
+            )
             result = stage.trajectory
             targets = stage.candidates[stage.trajectory.scene.candidate].targets if stage.trajectory.scene else None
             for line in describe_trajectory(stage):

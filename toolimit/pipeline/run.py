@@ -28,6 +28,7 @@ from toolimit.distributed import RayTarget, ray_cluster
 from toolimit.errors import InputError
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.pipeline.settings import PipelineSettings
+from toolimit.pipeline.shortlist import read_shortlist, shortlist_action_limit
 from toolimit.pipeline.stages import (
     EVALUATION_JSON,
     align_stage,
@@ -89,7 +90,8 @@ def run_pipeline(
     (:data:`~toolimit.distributed.RayTarget`): the alignment's samples and the robot selection's
     candidates run on a Ray cluster instead of local worker processes (same results); the learning
     run is one process, here. Raises InputError when a finished stage in ``out`` was made for
-    another tool, world or robot, StageFoundNothing when the alignment or the robot's selection
+    another tool, world or robot (or its shortlist tracked with another action limit than
+    ``settings.learning``'s), StageFoundNothing when the alignment or the robot's selection
     finds nothing, and KeyboardInterrupt (:mod:`toolimit.interrupts`) after the interrupted stage
     saved its checkpoint.
     """
@@ -148,6 +150,8 @@ def run_stages(
     for stage in stages:
         if finished[stage]:
             _check_same_run(out / stage, {"tool": tool, "world": world, "robot": robot})
+            if stage == "trajectory":
+                _check_same_shortlist_span(out / stage, settings.learning.action_limit)
             report(stage, f"done earlier: {out / stage}")
             continue
         report(stage, "started")
@@ -208,6 +212,24 @@ def _check_same_run(folder: Path, expected: dict[str, str]) -> None:
                 f"{folder} holds a finished stage for {key} {value!r}, not {expected[key]!r}: "
                 "choose another output folder or remove that one"
             )
+
+
+def _check_same_shortlist_span(folder: Path, action_limit: float | None) -> None:
+    """InputError if a finished trajectory stage's shortlist was tracked with another action limit
+    than the learner's (the kept candidate and the learner's fall-backs would be another span's)."""
+    if not read_shortlist(folder):
+        return
+    tracked = shortlist_action_limit(folder)
+    if tracked != action_limit:
+        raise InputError(
+            f"{folder} holds a finished stage whose shortlist was tracked with an action limit of "
+            f"{_span(tracked)}, not {_span(action_limit)}: choose another output folder or remove that one"
+        )
+
+
+def _span(action_limit: float | None) -> str:
+    """An action limit for a person."""
+    return "the robot's limits" if action_limit is None else f"{action_limit:g} rad/s"
 
 
 def _stage_times(out: Path) -> dict[str, float]:

@@ -43,6 +43,8 @@ from toolimit.trajopt.selection import SELECTION_JSON, AlignedCandidate, RobotSe
 SHORTLIST_SEED = 3000
 #: Stage iii's folder of the shortlisted candidates' trajectories.
 SHORTLIST_DIR = "shortlist"
+#: The field of ``selection.json`` that records the action limit the shortlist was tracked with.
+SHORTLIST_ACTION_LIMIT = "shortlist_action_limit"
 #: The cloned policy's deterministic success the learner asks before PPO (:func:`clone_reproduces`).
 CLONE_ACCEPTED_SUCCESS = 0.5
 #: Shortlisted candidates the learner clones at most (then it learns the clone that succeeded most often).
@@ -144,6 +146,17 @@ def shortlist_folder(trajectory_dir: str | os.PathLike[str], candidate: int) -> 
     return Path(trajectory_dir) / SHORTLIST_DIR / f"candidate_{candidate}"
 
 
+def shortlist_action_limit(trajectory_dir: str | os.PathLike[str]) -> float | None:
+    """The action limit (rad/s; None: the robot's own limits) the shortlist of a trajectory folder's
+    ``selection.json`` was tracked with (None also for a folder without a shortlist, and for one
+    made before the limit was recorded, when the shortlist always tracked within the robot's limits)."""
+    path = Path(trajectory_dir) / SELECTION_JSON
+    if not path.is_file():
+        return None
+    limit = json.loads(path.read_text()).get(SHORTLIST_ACTION_LIMIT)
+    return None if limit is None else float(limit)
+
+
 def read_shortlist(trajectory_dir: str | os.PathLike[str]) -> list[ShortlistEntry]:
     """The shortlist a trajectory folder's ``selection.json`` records, in :func:`learning_order`
     (empty without one: a selection without a shortlist, or a trajectory tracked from poses)."""
@@ -174,6 +187,7 @@ def clone_reproduces(cloning_record: dict[str, Any]) -> bool:
 __all__ = [
     "CLONE_ACCEPTED_SUCCESS",
     "CLONE_ATTEMPTS",
+    "SHORTLIST_ACTION_LIMIT",
     "SHORTLIST_SEED",
     "ShortlistEntry",
     "best_to_learn",
@@ -181,6 +195,7 @@ __all__ = [
     "clone_reproduces",
     "learning_order",
     "read_shortlist",
+    "shortlist_action_limit",
     "shortlist_folder",
     "shortlist_in_learning_task",
 ]

@@ -42,6 +42,7 @@ from toolimit.learn.training import (
 from toolimit.pipeline.settings import AlignSettings, EvaluationSettings, ExportSettings, TrajoptSettings
 from toolimit.pipeline.shortlist import (
     CLONE_ATTEMPTS,
+    SHORTLIST_ACTION_LIMIT,
     ShortlistEntry,
     best_to_learn,
     can_fall_back_on,
@@ -213,6 +214,7 @@ def trajopt_stage(
             )
             kept = best_to_learn(shortlist).candidate
             record["shortlist"] = [entry.record() for entry in shortlist]
+            record[SHORTLIST_ACTION_LIMIT] = action_limit
             for entry in shortlist:  # the learner may fall back to any of them (learn_stage)
                 shortlisted = selection.trajectories[entry.candidate]
                 assert shortlisted is not None  # shortlisted candidates have a robot reward
