@@ -279,3 +279,32 @@ def test_every_learner_of_an_experiment_has_its_tools_budget():
     assert caps["scythe"] == tool_record("scythe").settings["3d"]["learning.timesteps"]
     assert caps["spade"] == caps["hammer"] == PipelineSettings.for_world("3d").learning.timesteps
     assert preset("quick").settings(preset("quick").experiments[0], seed=0).learning.timesteps < 10_000
+
+
+def test_the_full_figure_learns_with_the_authors_span_of_the_action():
+    """The paper's experiments as the authors' environment ran them: actions spanning 3 rad/s on
+    every joint, for every learner of every experiment; the planar presets keep the arm's limits."""
+    from toolimit.experiments.reproduce import preset
+
+    full = preset("full")
+    assert {full.settings(e, seed=0).learning.action_limit for e in full.experiments} == {3.0}
+    for name in ("quick", "planar"):
+        chosen = preset(name)
+        assert chosen.settings(chosen.experiments[0], seed=0).learning.action_limit is None
+
+
+def test_results_of_another_seed_or_preset_are_not_taken_for_this_reproductions(quick_results, tmp_path, capsys):
+    out = tmp_path / "figure"
+    shutil.copytree(quick_results, out)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(REPO)
+        code = toolimit(["reproduce", "--preset", "quick", "--seed", "1", "--out", str(out), "--quiet"])
+    assert code == 2
+    said = capsys.readouterr().err.strip().splitlines()
+    assert said == [
+        f"toolimit reproduce: error: {out / 'results.json'}: these results were made with another seed "
+        "(seed 0, now 1); choose another output folder"
+    ]
+    before = json.loads((quick_results / "results.json").read_text())
+    assert json.loads((out / "results.json").read_text()) == before, "nothing written"
+    assert before["preset"] == {"name": "quick", "quick": True, "seed": 0, "settings_changes": {}}

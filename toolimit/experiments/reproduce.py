@@ -20,7 +20,10 @@ an hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstra
 authors' real recording, every method; with the hammer and the scythe on their five shipped
 demonstrations, every method on ``_00`` and the method's stages on the others, and the method's
 stages on the authors' real hammer recording; the UR5 and Talos with the spade on the real
-recording, the method's stages only; the 3D world's default settings). ``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
+recording, the method's stages only; the 3D world's default settings, every learner's actions
+spanning the authors' 3 rad/s on every joint, :data:`AUTHORS_ACTION_LIMIT`). A reproduction
+continues in its output folder only with the preset, seed and settings its results were made with.
+``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
 reproduce`` process whose output goes to OUT/logs/<experiment>.log (the results do not depend on
 it: every experiment is seeded on its own), with its share of the cores for its simulation's
 threads (:func:`child_environment`).
@@ -28,6 +31,7 @@ threads (:func:`child_environment`).
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -35,6 +39,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from toolimit.artifacts import save_json
 from toolimit.distributed import RayTarget
@@ -42,7 +47,7 @@ from toolimit.errors import InputError, StageFoundNothing
 from toolimit.experiments.cells import METHODS, PIPELINE_METHODS, CellResult, Experiment
 from toolimit.experiments.methods import Report, measure_method, missing_methods
 from toolimit.experiments.on_cluster import reproduce_on_cluster
-from toolimit.experiments.report import write_results
+from toolimit.experiments.report import RESULTS_JSON, write_results
 from toolimit.interrupts import SIGNALS, Interrupted
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.pipeline.run import run_pipeline
@@ -56,22 +61,33 @@ REAL_HAMMER_RECORDING = Path("../shared/data/video_demos/hammer_video1_aligned.n
 #: with the default 0.1 m every sample puts the nail's board off the ground (no candidate).
 REAL_HAMMER_Z_OFFSET_STD = 0.5
 SHIPPED_DEMOS = Path("data/demos")
+#: The span of the actions in ``full`` (rad/s on every joint, ``LearningConfig.action_limit``): the
+#: authors' environment clips the commanded velocities there (pyphysx_envs ``RobotEnv.step``),
+#: beyond the Panda's limits. With the Panda's own limits the scythe succeeds on 2 of its 5
+#: demonstrations, with this span on 4 (README, "The authors' action clip").
+AUTHORS_ACTION_LIMIT = 3.0
 PRESETS = ("quick", "planar", "full")
 
 
 @dataclass(frozen=True)
 class Preset:
-    """What :func:`reproduce` runs: the experiments and whether with the quick budgets."""
+    """What :func:`reproduce` runs: the experiments, whether with the quick budgets, and the
+    settings changed for every experiment (dotted paths of :class:`PipelineSettings`, values)."""
 
     name: str
     experiments: tuple[Experiment, ...]
     quick: bool = False
+    settings_changes: tuple[tuple[str, Any], ...] = ()
 
     def settings(self, experiment: Experiment, seed: int) -> PipelineSettings:
         """The pipeline settings of ``experiment``: its world's with its tool's own (the evaluation's
-        episodes are the cells'), seeded, with the experiment's own changes."""
+        episodes are the cells'), seeded, with the preset's changes and then the experiment's own."""
         settings = PipelineSettings.for_world(experiment.world, self.quick, experiment.tool).with_seed(seed)
-        return with_values(settings, dict(experiment.settings_changes))
+        return with_values(settings, dict(self.settings_changes + experiment.settings_changes))
+
+    def record(self, seed: int) -> dict[str, Any]:
+        """What results.json says of the preset, and what a resumed reproduction must match."""
+        return {"name": self.name, "quick": self.quick, "seed": seed, "settings_changes": dict(self.settings_changes)}
 
 
 def preset(name: str) -> Preset:
@@ -105,7 +121,7 @@ def preset(name: str) -> Preset:
     experiments += [
         Experiment("spade", "3d", robot, REAL_SPADE_RECORDING, methods=PIPELINE_METHODS) for robot in ("ur5", "talos")
     ]
-    return Preset(name, tuple(experiments))
+    return Preset(name, tuple(experiments), settings_changes=(("learning.action_limit", AUTHORS_ACTION_LIMIT),))
 
 
 def reproduce(
@@ -127,10 +143,11 @@ def reproduce(
     after every finished cell was saved."""
     out = Path(out)
     say = report or (lambda name, line: None)
+    _check_same_preset(out, chosen.record(seed))
 
     def results() -> list[Path]:
         cells = [CellResult.load(path) for path in sorted((out / "cells").glob("*.json"))]
-        return write_results(out, cells, {"name": chosen.name, "quick": chosen.quick, "seed": seed})
+        return write_results(out, cells, chosen.record(seed))
 
     code = 0
     if ray:
@@ -144,6 +161,22 @@ def reproduce(
             results()
     say("results", f"wrote {', '.join(str(path) for path in results())}")
     return code
+
+
+def _check_same_preset(out: Path, preset: dict[str, Any]) -> None:
+    """InputError when ``out`` holds the results of another preset, seed or settings: their cells
+    would be taken for this reproduction's."""
+    path = out / RESULTS_JSON
+    if not path.is_file():
+        return
+    earlier = {"settings_changes": {}} | json.loads(path.read_text()).get("preset", {})
+    changed = [key for key in ("name", "seed", "settings_changes") if earlier.get(key) != preset[key]]
+    if changed:
+        said = "; ".join(f"{key} {earlier.get(key)!r}, now {preset[key]!r}" for key in changed)
+        raise InputError(
+            f"{path}: these results were made with another {' and '.join(changed)} ({said}); "
+            "choose another output folder"
+        )
 
 
 def reproduce_experiment(
