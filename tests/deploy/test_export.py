@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 
 import numpy as np
 import pytest
@@ -17,10 +18,15 @@ from toolimit.deploy import (
     published_limits,
     retime,
 )
-from toolimit.deploy.export import SUMMARY_JSON, TRAJECTORY_CSV
+from toolimit.deploy.export import SUMMARY_JSON, TRAJECTORY_CSV, PathDeviation
+from toolimit.robots.limits import Margins
 
 DT = 1.0 / 24.0
 PANDA = published_limits("panda")
+#: The limits an export keeps by default: 0.01 rad inside the positions, 0.95 of the rest.
+NARROWED = PANDA.within(Margins())
+#: No margin at all: the published limits themselves.
+NO_MARGIN = Margins(position=0.0, velocity=1.0, acceleration=1.0, jerk=1.0)
 
 
 def _read_csv(path):
@@ -29,18 +35,18 @@ def _read_csv(path):
     return rows[0], np.array(rows[1:], dtype=float)
 
 
-def _assert_within_limits_by_finite_differences(times: np.ndarray, q: np.ndarray) -> dict[str, float]:
+def _assert_within_limits_by_finite_differences(times: np.ndarray, q: np.ndarray, limits=NARROWED) -> dict[str, float]:
     """Position, and velocity / acceleration / jerk from finite differences of the positions (with
-    the robot at rest before the start and after the end), against the Panda's published limits;
-    returns each quantity's peak |value| / limit."""
+    the robot at rest before the start and after the end), against ``limits`` (by default the
+    Panda's published limits within the default margins); returns each quantity's peak |value| / limit."""
     step = np.diff(times)
     np.testing.assert_allclose(step, step[0], rtol=1e-6)
     h = step[0]
     padded = np.concatenate([np.repeat(q[:1], 3, axis=0), q, np.repeat(q[-1:], 3, axis=0)])
-    assert np.all(q >= PANDA.position_lower) and np.all(q <= PANDA.position_upper)
+    assert np.all(q >= limits.position_lower) and np.all(q <= limits.position_upper)
     peaks = {}
     for order, name in ((1, "velocity"), (2, "acceleration"), (3, "jerk")):
-        ratio = np.abs(np.diff(padded, order, axis=0)) / h**order / getattr(PANDA, name)
+        ratio = np.abs(np.diff(padded, order, axis=0)) / h**order / getattr(limits, name)
         peaks[name] = float(ratio.max())
         assert peaks[name] <= 1.0 + 1e-6, f"{name} reaches {peaks[name]:.4f} x its limit"
     return peaks
@@ -60,15 +66,17 @@ def test_a_slow_smooth_trajectory_keeps_its_timing(write_trajectory, tmp_path):
     plan, times, positions, summary = _export(write_trajectory, tmp_path, q)
     peaks = _assert_within_limits_by_finite_differences(times, positions)
     assert peaks["velocity"] < 0.5
-    # nothing to slow down: the duration is the optimised 4 s plus the two end spans (2 dt / 4)
-    assert summary["optimised_duration_s"] == pytest.approx(4.0)
-    assert summary["duration_s"] == pytest.approx(4.0 + 2 * DT / 4)
-    assert len(times) == round(summary["duration_s"] * 1000) + 1 and summary["rate_hz"] == 1000.0
+    # within the limits at its own timing: its samples are the control points (one piece per step)
+    # and nothing is slowed down: the duration is the optimised 4 s plus the two end spans (2 dt)
+    assert summary["subdivisions"] == 1 and summary["optimised_duration_s"] == pytest.approx(4.0)
+    assert summary["duration_s"] == pytest.approx(4.0 + 2 * DT)
+    assert summary["margins"] == Margins().as_dict()
+    assert len(times) == math.ceil(summary["duration_s"] * 1000 - 1e-9) + 1 and summary["rate_hz"] == 1000.0
     np.testing.assert_allclose(positions[0], q[0], atol=1e-12)
     np.testing.assert_allclose(positions[-1], q[-1], atol=1e-12)
     assert summary["path_deviation_rad"] < 1e-3  # a smooth path is followed closely
     assert summary["joint_names"] == list(PANDA_JOINTS)
-    assert summary["limits"]["jerk_rad_s3"] == [7500.0, 3750.0, 5000.0, 6250.0, 7500.0, 10000.0, 10000.0]
+    assert summary["limits"]["jerk_rad_s3"] == pytest.approx([0.95 * j for j in (7500, 3750, 5000, 6250, 7500, 1e4, 1e4)])
     assert all(check["passed"] for check in summary["checks"].values())
     assert summary["checks"]["velocity"]["max_ratio"] == pytest.approx(peaks["velocity"], rel=0.01)
     assert summary["base"]["yaw_rad"] == 1.5
@@ -87,11 +95,19 @@ def _bang_bang_into_the_limit(dt: float = DT) -> np.ndarray:
     return q
 
 
+def test_a_trajectory_touching_a_position_limit_is_refused_by_default(write_trajectory, tmp_path):
+    q = _bang_bang_into_the_limit()
+    with pytest.raises(PathOutsideLimits, match=r"panda_joint3 position 2\.8973 rad .* beyond its limit 2\.8873 rad"):
+        export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_trajectory_at_the_velocity_limits_touching_a_position_limit_is_retimed(write_trajectory, tmp_path):
+    """Without margins (the published limits themselves) the retiming reaches the binding limit."""
     q = _bang_bang_into_the_limit()
     assert q[:, 2].max() == PANDA.position_upper[2]
-    _, times, positions, summary = _export(write_trajectory, tmp_path, q)
-    peaks = _assert_within_limits_by_finite_differences(times, positions)
+    _, times, positions, summary = _export(write_trajectory, tmp_path, q, margins=NO_MARGIN, subdivisions=4)
+    peaks = _assert_within_limits_by_finite_differences(times, positions, PANDA)
     assert positions[:, 2].max() <= PANDA.position_upper[2]  # no overshoot past the limit
     assert peaks["acceleration"] > 0.95  # slowed down just enough: the binding limit is reached
     assert summary["duration_s"] > summary["optimised_duration_s"]
@@ -101,13 +117,29 @@ def test_a_trajectory_at_the_velocity_limits_touching_a_position_limit_is_retime
     assert summary["path_deviation_rad"] < 0.25 * np.abs(np.diff(q, 2, axis=0)).max()
 
 
+def test_a_path_far_from_its_samples_is_warned(write_trajectory, tmp_path):
+    """One piece per step cuts the bang-bang path's corners by 0.037 rad, past the 0.02 rad tolerance."""
+    q = _bang_bang_into_the_limit()
+    with pytest.warns(PathDeviation, match=r"departs from the trajectory's samples by up to 0\.037 rad"):
+        _export(write_trajectory, tmp_path, q, margins=NO_MARGIN, subdivisions=1)
+
+
+def test_a_rate_giving_a_handful_of_samples_or_none_is_refused(write_trajectory, tmp_path):
+    trajectory = load_trajectory(write_trajectory(np.stack([PANDA_MIDDLE, PANDA_MIDDLE + 1e-3]), DT))  # 0.125 s
+    for rate, problem in ((1e-3, "rate must be between 10 and 10000 Hz"), (1e15, "rate must be between"),
+                          (10.0, "gives fewer than 10 samples")):
+        with pytest.raises(ValueError, match=problem):
+            export_trajectory(trajectory, "panda", tmp_path / "out", rate=rate)
+    assert not (tmp_path / "out").exists()
+
+
 def test_more_subdivisions_stay_closer_to_the_samples_and_take_longer(write_trajectory, tmp_path):
     q = _bang_bang_into_the_limit()
     coarse, fine = (retime(q, DT, PANDA, subdivisions=m) for m in (1, 8))
     assert fine.path_deviation < coarse.path_deviation / 4
     assert fine.duration > coarse.duration
     samples = fine.sample(2000.0)
-    _assert_within_limits_by_finite_differences(samples.times, samples.position)
+    _assert_within_limits_by_finite_differences(samples.times, samples.position, PANDA)
 
 
 def test_only_the_fast_part_is_slowed_down():
@@ -115,15 +147,15 @@ def test_only_the_fast_part_is_slowed_down():
     times = DT * np.arange(13)
     burst = gentle[-1] + np.outer(bump(1.0, 2 * np.pi / times[-1], times), [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.8])
     q = np.concatenate([gentle, burst[1:]])  # 4 s gentle, then joint 7 out and back in 0.5 s (far too fast)
-    path = retime(q, DT, PANDA)
+    path = retime(q, DT, PANDA, subdivisions=4)
     samples = path.sample(1000.0)
-    _assert_within_limits_by_finite_differences(samples.times, samples.position)
-    burst_alone = retime(burst, DT, PANDA).duration
+    _assert_within_limits_by_finite_differences(samples.times, samples.position, PANDA)
+    burst_alone = retime(burst, DT, PANDA, subdivisions=4).duration
     assert burst_alone > 2 * 0.5  # the burst needs at least twice its time
     assert path.duration < 4.0 + burst_alone + 0.1  # the gentle 4 s are not slowed down
     uniform = 4.5 * burst_alone / 0.5  # the burst's stretch applied to the whole motion
     assert path.duration < 0.5 * uniform
-    gentle_alone = retime(gentle, DT, PANDA).derivative(np.array([2.0]), 0)[0]
+    gentle_alone = retime(gentle, DT, PANDA, subdivisions=4).derivative(np.array([2.0]), 0)[0]
     np.testing.assert_allclose(samples.position[2000], gentle_alone, atol=1e-6)  # same timing at t = 2 s
 
 
@@ -137,8 +169,8 @@ def test_too_fast_everywhere_is_retimed_and_respects_every_limit(write_trajector
 def test_refuses_a_path_sample_outside_a_position_limit(write_trajectory, tmp_path):
     q = slow_smooth()
     q[:, 3] = -1.5 + bump(1.5, 2 * np.pi / 4.0, DT * np.arange(len(q)))  # joint 4 up to 0 at 2 s > -0.0698
-    message = (r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0698 rad "
-               r"by 0\.0698 rad .*no retiming can fix .*\(9 of 97 samples are outside\)")
+    message = (r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0798 rad "
+               r"by 0\.0798 rad .*no retiming can fix .*\(11 of 97 samples are outside\)")
     with pytest.raises(PathOutsideLimits, match=message):
         export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
     assert not (tmp_path / "out").exists()
@@ -206,11 +238,16 @@ def test_a_panda_policys_rollout_exports_within_the_published_limits(tmp_path):
     assert rollout.shape == (task.horizon + 1, 7)
     folder = save_rollout_trajectory(rollout, task, tmp_path / "policy_rollout")
     out = tmp_path / "export"
-    export_trajectory(load_trajectory(folder), "panda", out)
+    export_trajectory(load_trajectory(folder), "panda", out, check=task, check_episodes=2)
     header, table = _read_csv(out / TRAJECTORY_CSV)
     assert header == ["time_s", *PANDA_JOINTS]
     peaks = _assert_within_limits_by_finite_differences(table[:, 0], table[:, 1:])
     assert max(peaks.values()) > 0.1  # the rollout moves the arm: the check is not vacuous
-    # The same path, retimed: the exported motion passes within 0.01 rad of every rollout sample.
+    # The same path at its own timing (learnt within the bound: nothing slowed down, one piece per
+    # step), passing within 0.01 rad of every rollout sample, replayed open-loop in the task.
+    summary = json.loads((out / SUMMARY_JSON).read_text())
+    assert summary["subdivisions"] == 1
+    assert summary["duration_s"] == pytest.approx((task.horizon + 2) * task.control_dt)
     nearest = [np.min(np.max(np.abs(table[:, 1:] - sample), axis=1)) for sample in rollout]
     assert max(nearest) < 0.01
+    assert summary["open_loop"]["episodes"] == 2 and len(summary["open_loop"]["goal_reward"]) == 2

@@ -6,10 +6,11 @@ import dataclasses
 
 import numpy as np
 import pytest
+from trajopt_helpers import FPS, reachable_path, targets_of
 
+from toolimit.robots.motion_bound import MotionBound
 from toolimit.trajopt import SqpOptions, TrackingProblem, TrackingWeights, solve_sqp
 from toolimit.trajopt.sqp import project_to_limits
-from trajopt_helpers import FPS, reachable_path, targets_of
 
 # a tiny velocity weight: the exact path is then (nearly) optimal
 PRECISE = TrackingWeights(position=1.0, rotation=0.5, velocity=1e-7)
@@ -21,7 +22,8 @@ def test_recovers_a_reachable_trajectory_and_its_base(robot_name, request):
     path = reachable_path(robot, 30)
     true_base = np.array([0.4, -0.3, 0.5]) * robot.base_dofs
     targets = targets_of(robot, path, true_base)
-    problem = TrackingProblem(robot, targets, 1 / FPS, q_start=path[0], weights=PRECISE)
+    # the model's limits: a random reachable path need not keep the Panda's acceleration bound
+    problem = TrackingProblem(robot, targets, 1 / FPS, q_start=path[0], weights=PRECISE, bound=MotionBound.model(robot))
     guess = true_base + np.array([0.08, -0.05, 0.1]) * robot.base_dofs
     outcome = solve_sqp(problem, guess, SqpOptions(osqp_eps=1e-6))
     positions, _ = robot.tool_poses(outcome.q[1:], outcome.base)
@@ -64,13 +66,41 @@ def test_hard_limits_hold_exactly_when_targets_ask_for_more(planar3):
 def test_projection_satisfies_both_limits():
     rng = np.random.default_rng(0)
     lower, upper, vlim, dt = -np.ones(4), np.ones(4), np.full(4, 2.0), 0.1
+    bound = MotionBound(lower, upper, vlim, None)
     q = rng.uniform(-3, 3, size=(50, 4))
     q[0] = 0.0
-    projected = project_to_limits(q, dt, lower, upper, vlim)
+    projected = project_to_limits(q, dt, bound)
     assert np.all(projected >= lower) and np.all(projected <= upper)
     assert np.all(np.abs(np.diff(projected, axis=0)) <= vlim * dt + 1e-15)
     inside = np.cumsum(np.full((5, 4), 0.1), axis=0) - 0.1  # a feasible path is unchanged
-    np.testing.assert_allclose(project_to_limits(inside, dt, lower, upper, vlim), inside)
+    np.testing.assert_allclose(project_to_limits(inside, dt, bound), inside)
+
+
+def test_projection_keeps_the_acceleration_bound_from_rest():
+    rng = np.random.default_rng(1)
+    lower, upper, vlim, alim, dt = -np.ones(3), np.ones(3), np.full(3, 2.0), np.full(3, 5.0), 0.05
+    q = rng.uniform(-3, 3, size=(80, 3))
+    q[0] = 0.0
+    projected = project_to_limits(q, dt, MotionBound(lower, upper, vlim, alim))
+    velocity = np.vstack([np.zeros((1, 3)), np.diff(projected, axis=0) / dt])
+    assert np.all(projected >= lower) and np.all(projected <= upper)
+    assert np.all(np.abs(velocity) <= vlim + 1e-12)
+    assert np.all(np.abs(np.diff(velocity, axis=0) / dt) <= alim * (1 + 1e-9))
+
+
+def test_the_qp_keeps_the_panda_within_its_acceleration_bound(panda):
+    """A path whose targets start at full speed: with the Panda's bound (published limits within
+    the margins) the solution starts from rest and never changes velocity faster than the bound;
+    with the model's limits alone it does."""
+    path = reachable_path(panda, 20, amplitude=0.6)
+    targets = targets_of(panda, path, np.zeros(3))
+    options = SqpOptions(max_iterations=15)
+    for bound, bounded in ((MotionBound.of(panda), True), (MotionBound.model(panda), False)):
+        problem = TrackingProblem(panda, targets, 1 / FPS, q_start=path[0], weights=PRECISE, bound=bound)
+        outcome = solve_sqp(problem, np.zeros(3), options)
+        velocity = np.vstack([np.zeros((1, 7)), np.diff(outcome.q, axis=0) * FPS])
+        ratio = np.max(np.abs(np.diff(velocity, axis=0) * FPS) / MotionBound.of(panda).acceleration)
+        assert (ratio <= 1 + 1e-6) == bounded, f"acceleration / bound {ratio:.3f}"
 
 
 def test_iteration_budget_and_bad_guess(planar3):

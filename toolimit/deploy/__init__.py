@@ -5,9 +5,9 @@ policy's rollout): it returns a :class:`RetimedPath` whose ``sample(rate)`` give
 """
 
 from toolimit.deploy.export import ExportPlan, export_trajectory, plan_export
-from toolimit.deploy.limits import SUPPORTED_ROBOTS, JointLimits, published_limits
 from toolimit.deploy.retime import RetimedPath, SampledTrajectory, retime
 from toolimit.errors import PathOutsideLimits
+from toolimit.robots.limits import SUPPORTED_ROBOTS, JointLimits, published_limits
 from toolimit.trajopt.result import JointTrajectory, load_trajectory
 
 __all__ = [

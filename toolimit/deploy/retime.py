@@ -39,12 +39,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import BSpline
 
-from toolimit.deploy.limits import JointLimits
 from toolimit.errors import PathOutsideLimits
+from toolimit.robots.limits import JointLimits
+from toolimit.robots.motion_bound import MotionBound
 
 DEGREE = 3
-#: Pieces per segment between two samples in the control polygon (see :func:`retime`).
+#: Pieces per segment between two samples in the control polygon for a path whose samples do not
+#: keep the limits at their own timing (see :func:`retime`).
 DEFAULT_SUBDIVISIONS = 4
+#: The most pieces per step: beyond, the corners are cut by less than rounding.
+MAX_SUBDIVISIONS = 64
 #: Rounds of local stretching before the final uniform stretch.
 _MAX_ROUNDS = 200
 #: Relative headroom of each stretch, so that a control point stretched onto its limit is not
@@ -88,6 +92,7 @@ class RetimedPath:
             sample's Greville abscissa (where its weight peaks).
         lowest, highest: (N,) rad, each joint's smallest and largest sample: the curve stays within
             them (positions are clipped to them, which only removes rounding, of order 1e-16 rad).
+        subdivisions: pieces per step between samples the curve was built with.
     """
 
     spline: BSpline
@@ -95,6 +100,7 @@ class RetimedPath:
     path_deviation: float
     lowest: np.ndarray
     highest: np.ndarray
+    subdivisions: int
 
     def derivative(self, times: np.ndarray, order: int) -> np.ndarray:
         """(K, N) d^order q / dt^order at ``times`` (K,) s; the final position is held after the end."""
@@ -130,12 +136,20 @@ def check_path_positions(q: np.ndarray, dt: float, limits: JointLimits) -> None:
     )
 
 
-def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int = DEFAULT_SUBDIVISIONS) -> RetimedPath:
+def subdivisions_for(q: np.ndarray, dt: float, limits: JointLimits) -> int:
+    """1 for a path q (T+1, N) whose samples keep ``limits``' range, velocity and acceleration at
+    their own timing from rest (a motion learnt within them): the samples themselves are the
+    control points and the curve keeps their timing, within a sixth of a step's velocity change of
+    each sample; else :data:`DEFAULT_SUBDIVISIONS`."""
+    return 1 if MotionBound.of_limits(limits).holds(q, dt) else DEFAULT_SUBDIVISIONS
+
+
+def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int | None = None) -> RetimedPath:
     """Time the joint path q (T+1, N) rad, sampled every ``dt`` s, within ``limits`` (see the module docstring).
 
     ``subdivisions``: the control points are the straight segments between samples cut into this
     many pieces; more pieces keep the curve closer to the samples (corners are cut less) at the
-    price of a slower turn at each corner.
+    price of a slower turn at each corner. None: :func:`subdivisions_for` the path.
 
     Raises :class:`PathOutsideLimits` if a sample is outside the position limits, ValueError for a
     malformed path.
@@ -147,9 +161,11 @@ def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int = DE
         raise ValueError(f"dt must be a positive number of seconds, got {dt}")
     if not np.all(np.isfinite(q)):
         raise ValueError("q contains non-finite values")
+    check_path_positions(q, dt, limits)
+    if subdivisions is None:
+        subdivisions = subdivisions_for(q, dt, limits)
     if not (isinstance(subdivisions, (int, np.integer)) and subdivisions >= 1):
         raise ValueError(f"subdivisions must be a positive integer, got {subdivisions}")
-    check_path_positions(q, dt, limits)
     fractions = np.arange(subdivisions) / subdivisions
     polyline = np.concatenate(
         [(q[:-1, None] + fractions[:, None] * np.diff(q, axis=0)[:, None]).reshape(-1, q.shape[1]), q[-1:]]
@@ -176,6 +192,7 @@ def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int = DE
         path_deviation=float(deviation),
         lowest=q.min(axis=0),
         highest=q.max(axis=0),
+        subdivisions=int(subdivisions),
     )
 
 

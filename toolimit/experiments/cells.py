@@ -73,6 +73,12 @@ class CellResult:
         env_steps: environment steps the method learnt with (0 for tool_only and trajopt).
         wall_time_s: seconds the method's own work took (for the final policy: the whole
             ``toolimit run``; for the baselines: their learning).
+        limits: for a learnt policy, how far its rollouts go past the robot's joint limits
+            (:meth:`LimitUse.record <toolimit.learn.limit_use.LimitUse.record>`); None otherwise.
+        exported: for the final policy on a robot with published limits, its first rollout
+            exported and replayed open-loop from the same resets
+            (:meth:`OpenLoopResult.record <toolimit.deploy.open_loop.OpenLoopResult.record>`);
+            None otherwise.
     """
 
     tool: str
@@ -85,6 +91,8 @@ class CellResult:
     goal_rewards: list[float]
     env_steps: int
     wall_time_s: float
+    limits: dict[str, Any] | None = None
+    exported: dict[str, Any] | None = None
 
     @classmethod
     def of(
@@ -95,6 +103,8 @@ class CellResult:
         successes: np.ndarray,
         env_steps: int = 0,
         wall_time_s: float = 0.0,
+        limits: dict[str, Any] | None = None,
+        exported: dict[str, Any] | None = None,
     ) -> CellResult:
         """The cell of ``experiment`` and ``method`` from per-episode goal rewards and successes (E,)."""
         if method not in METHODS:
@@ -110,6 +120,8 @@ class CellResult:
             goal_rewards=[float(g) for g in goal_rewards],
             env_steps=int(env_steps),
             wall_time_s=float(wall_time_s),
+            limits=limits,
+            exported=exported,
         )
 
     def record(self) -> dict[str, Any]:

@@ -14,15 +14,19 @@ from pathlib import Path
 import numpy as np
 
 from toolimit.align.outputs import CANDIDATES_NPZ
+from toolimit.deploy.export import plan_export
+from toolimit.deploy.open_loop import replay_open_loop
 from toolimit.errors import InputError
 from toolimit.experiments.cells import CellResult, Experiment
 from toolimit.learn.cloning import collect_demonstrations
 from toolimit.learn.evaluate import evaluate
 from toolimit.learn.task import LearningTask
 from toolimit.learn.training import LEARNING_JSON, load_policy
+from toolimit.robots.limits import SUPPORTED_ROBOTS, Margins, published_limits
 from toolimit.scenes.registry import make_scene
 from toolimit.scenes.replay import replay
 from toolimit.tools import ToolPose, hold_last
+from toolimit.trajopt.result import JointTrajectory
 from toolimit.trajopt.selection import load_candidates
 
 
@@ -56,11 +60,19 @@ def measure_trajopt(experiment: Experiment, task: LearningTask, episodes: int, s
 
 
 def measure_policy(experiment: Experiment, method: str, policy_dir: Path, episodes: int, seed: int) -> CellResult:
-    """A learnt policy's deterministic rollouts (``toolimit learn``'s folder ``policy_dir``);
-    env steps and wall time from its ``learning.json``."""
+    """A learnt policy's deterministic rollouts (``toolimit learn``'s folder ``policy_dir``), how far
+    they go past the robot's limits, and for the final policy on a robot with published limits its
+    first rollout exported and replayed open-loop from the same resets; env steps and wall time
+    from its ``learning.json``."""
     model, task = load_policy(policy_dir)
     evaluation = evaluate(model, task, episodes, deterministic=True, seed=seed)
     learned = json.loads((policy_dir / LEARNING_JSON).read_text())
+    exported = None
+    if method == "final" and task.robot in SUPPORTED_ROBOTS:
+        q = evaluation.joint_positions[0]
+        rollout = JointTrajectory(q, np.diff(q, axis=0) / task.control_dt, task.base, task.joint_names, task.control_dt)
+        plan = plan_export(rollout, published_limits(task.robot).within(Margins()))
+        exported = replay_open_loop(plan.samples.times, plan.samples.position, task, episodes, seed).record()
     return CellResult.of(
         experiment,
         method,
@@ -68,4 +80,6 @@ def measure_policy(experiment: Experiment, method: str, policy_dir: Path, episod
         evaluation.successes,
         env_steps=learned["env_steps"],
         wall_time_s=learned["wall_time_s"],
+        limits=evaluation.limits.record(),
+        exported=exported,
     )

@@ -32,19 +32,40 @@ def _groups(cells: Sequence[CellResult]) -> dict[tuple[str, str, str, str], dict
     return groups
 
 
+#: The table's columns after the methods': the final policy's steps past the robot's limits, its
+#: export replayed open-loop.
+EXTRA_COLUMNS = ("final: steps past limits", "exported (open-loop)")
+
+
 def markdown_table(cells: Sequence[CellResult]) -> str:
-    """One row per experiment, one column per method: "goal reward (success rate)"; "-" where not measured."""
+    """One row per experiment, one column per method: "goal reward (success rate)", then the final
+    policy's share of steps past the robot's limits (largest velocity and acceleration ratios) and
+    its export replayed open-loop; "-" where not measured."""
     lines = [
-        "| tool | world | robot | demonstration | " + " | ".join(METHODS) + " |",
-        "| --- | --- | --- | --- | " + " | ".join("---:" for _ in METHODS) + " |",
+        "| tool | world | robot | demonstration | " + " | ".join((*METHODS, *EXTRA_COLUMNS)) + " |",
+        "| --- | --- | --- | --- | " + " | ".join("---:" for _ in (*METHODS, *EXTRA_COLUMNS)) + " |",
     ]
     for (tool, world, robot, demo), by_method in _groups(cells).items():
         values = [
-            f"{by_method[m].goal_reward:.1f} ({by_method[m].success_rate:.2f})" if m in by_method else "-"
-            for m in METHODS
+            _outcome(by_method[m].goal_reward, by_method[m].success_rate) if m in by_method else "-" for m in METHODS
         ]
+        final = by_method.get("final")
+        values.append(_limits(final.limits) if final is not None and final.limits is not None else "-")
+        exported = None if final is None else final.exported
+        values.append(_outcome(exported["goal_reward_mean"], exported["success_rate"]) if exported else "-")
         lines.append(f"| {tool} | {world} | {robot} | {demo} | " + " | ".join(values) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _outcome(goal_reward: float, success_rate: float) -> str:
+    return f"{goal_reward:.1f} ({success_rate:.2f})"
+
+
+def _limits(record: dict[str, Any]) -> str:
+    """ "share (velocity ratio, acceleration ratio)", e.g. "0.00 (0.95, 0.95)"."""
+    acceleration = record["max_acceleration_ratio"]
+    ratios = f"{record['max_velocity_ratio']:.2f}" + ("" if acceleration is None else f", {acceleration:.2f}")
+    return f"{record['share_of_steps_past_limits']:.2f} ({ratios})"
 
 
 def write_results(out_dir: Path, cells: Sequence[CellResult], preset: dict[str, Any]) -> list[Path]:

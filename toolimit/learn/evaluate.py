@@ -18,6 +18,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 
 from toolimit.artifacts import save_npz
 from toolimit.errors import InputError
+from toolimit.learn.limit_use import LimitUse, limit_use
 from toolimit.learn.simulator import observation_size
 from toolimit.learn.task import LearningTask
 from toolimit.learn.vec_env import BatchedTaskVecEnv
@@ -37,6 +38,7 @@ class Evaluation:
         successes: (E,) the paper's success criterion per episode.
         returns: (E,) episode returns (sum of the per-step rewards).
         joint_positions: (E, H+1, N) joint trajectories, rad (for views and export).
+        limits: how far the episodes' motions go past the robot's joint limits.
     """
 
     deterministic: bool
@@ -44,6 +46,7 @@ class Evaluation:
     successes: np.ndarray
     returns: np.ndarray
     joint_positions: np.ndarray
+    limits: LimitUse
 
     def record(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -54,6 +57,7 @@ class Evaluation:
             "goal_reward_mean": float(np.mean(self.goal_rewards)),
             "goal_reward": self.goal_rewards.tolist(),
             "return_mean": float(np.mean(self.returns)),
+            "limits": self.limits.record(),
         }
 
 
@@ -86,12 +90,14 @@ def rollout(model: BaseAlgorithm, env: BatchedTaskVecEnv, deterministic: bool = 
             joints.append(np.array([info["terminal_joints"] for info in infos]))
             break
         joints.append(env.simulator.q.copy())
+    joint_positions = np.stack(joints, axis=1)
     return Evaluation(
         deterministic,
         np.array([info["goal_reward"] for info in infos]),
         np.array([info["is_success"] for info in infos]),
         returns,
-        np.stack(joints, axis=1),
+        joint_positions,
+        limit_use(joint_positions, env.task.control_dt, env.simulator.robot),
     )
 
 

@@ -15,16 +15,20 @@ Observation (float32, per instance), the paper's state:
   two more entries follow: the goal box's offset x, y from the aligned position (world frame, in
   units of 0.1 m: :meth:`AdrBounds.observed <toolimit.learn.adr.AdrBounds.observed>`) in this
   instance, so D = 3 + 4 + N + 1 + 2.
-Action: (N,) in [-1, 1], joint velocity as a fraction of each joint's action scale (SB3 clips
-  actions to a symmetric normalised space): the robot's velocity limit, or the task's
-  ``action_limit`` on every joint (rad/s). The authors' environment clips the commanded
-  velocities at 3 rad/s (pyphysx_envs ``RobotEnv.step``), beyond the Panda's own limits (2.175 and
-  2.61 rad/s), and only penalises the excess; the project's tasks clip at the robot's limits unless
-  given the authors' (``toolimit learn --action-limit 3``), so that a learnt motion runs on the arm
-  as it was learnt.
+Action: (N,) in [-1, 1], the commanded joint velocity as a fraction of each joint's action scale
+  (SB3 clips actions to a symmetric normalised space), executed through the robot's
+  :class:`~toolimit.robots.motion_bound.MotionBound`: for a robot with published limits (the
+  Panda) the velocity and the acceleration stay within them, with the export's margins, and the
+  joints brake before their position limits, so that the motion learnt is the one the export
+  streams to the robot; other robots are bounded by their model's velocity and position limits.
+  The authors' environment clips the commanded velocities at 3 rad/s (pyphysx_envs
+  ``RobotEnv.step``), beyond the Panda's own limits (2.175 and 2.61 rad/s), bounds no
+  acceleration and only penalises the excess speed; the task's ``action_limit``
+  (``toolimit learn --action-limit 3``) gives that span instead, a variant past the robot's limits.
+  The arm starts every episode at rest.
 Reward per step (docs/original_setup.md#robot-environment): (goal reward + velocity penalty) / H, where the penalty is
-  -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) (rad/s, w = 0.01) on the joint velocity
-  v, v_max the robot's own limits whatever the action scale. The authors' weight grew by 1e-4 per
+  -w (|max(0, v - 0.9 v_max)| + |min(0, v + 0.9 v_max)|) (rad/s, w = 0.01) on the commanded joint
+  velocity v, v_max the robot's own limits whatever the action scale. The authors' weight grew by 1e-4 per
   reset; here it is constant, so that a state earns the same return whatever the number of
   episodes before it. With ``reward="dense"`` (the paper's
   dense-reward baseline) the scene's dense shaping (the appendix's, ``Scene.dense_reward``) is
@@ -53,6 +57,7 @@ from toolimit.learn.adr import GOAL_BOX, AdrBounds, goal_box_spec
 from toolimit.learn.batch_part import BatchPart
 from toolimit.learn.task import LearningTask
 from toolimit.robots import make_robot
+from toolimit.robots.motion_bound import MotionBound
 from toolimit.rotations import quaternions_wxyz
 from toolimit.scenes.base import instance_params
 from toolimit.scenes.registry import make_scene
@@ -119,10 +124,10 @@ class TaskSimulator:
             )
         self.scene_kwargs = scene_kwargs
         self.n_joints = len(task.joint_names)
+        #: What a step can command the joints (module docstring).
+        self.bound = MotionBound.of(self.robot, speed=task.action_limit)
         #: (N,) rad/s: the joint velocity of an action of 1 (module docstring).
-        self.action_scale = (
-            self.robot.velocity_limit if task.action_limit is None else np.full(self.n_joints, task.action_limit)
-        )
+        self.action_scale = self.bound.velocity
         self.adr = adr
         self.observation_size = observation_size(self.n_joints, adr)
         #: The ADR bounds the goal box is drawn in (None without ADR); AdrCallback moves them.
@@ -140,6 +145,8 @@ class TaskSimulator:
         self.dt = task.control_dt
         self.horizon = task.horizon
         self.q = np.zeros((self.batch_size, self.n_joints))
+        #: (B, N) rad/s, the joints' velocity over the last step (zero at a reset: at rest).
+        self.velocity = np.zeros((self.batch_size, self.n_joints))
         self.t = 0
         # the tool's pose at the current step (world frame), set by reset and step
         self._position = np.zeros((self.batch_size, 3))  # (B, 3) m
@@ -157,13 +164,19 @@ class TaskSimulator:
         }
         return TaskSimulator(self.task, **(kwargs | changes))
 
-    def reset(self, rng: np.random.Generator, box_positions: np.ndarray | None = None) -> np.ndarray:
+    def reset(
+        self, rng: np.random.Generator, box_positions: np.ndarray | None = None, start: np.ndarray | None = None
+    ) -> np.ndarray:
         """Start B episodes; returns the observations (B, D). ``box_positions`` (B, 2): the goal
         boxes' x, y (m, world frame) instead of the ADR draw (the heat map's grid); of the whole
-        batch if this is a part of one."""
+        batch if this is a part of one. ``start`` (N,) rad: every instance's start joints instead
+        of the reference's noisy start (the noise is drawn all the same, so the scene's draws do
+        not change)."""
         part = self.part
         noise = rng.normal(0.0, JOINT_NOISE_STD, size=(part.total, self.n_joints))
-        self.q = np.clip(self.task.reference_q[0] + part.of(noise), self.robot.lower, self.robot.upper)
+        start_q = self.task.reference_q[0] + part.of(noise) if start is None else np.tile(start, (self.batch_size, 1))
+        self.q = np.clip(start_q, self.bound.lower, self.bound.upper)
+        self.velocity = np.zeros_like(self.q)
         box_placed = box_positions is not None or self.adr_bounds is not None
         params = self._noisy_params(rng, box_placed)
         placed = np.ones(part.total, dtype=bool)
@@ -227,15 +240,25 @@ class TaskSimulator:
         """Apply actions (B, N) in [-1, 1]; returns observations (B, D), rewards (B,) and goal
         rewards (B,) after the step."""
         actions = np.asarray(actions, dtype=float).reshape(self.batch_size, self.n_joints)
-        velocity = np.clip(actions, -1.0, 1.0) * self.action_scale
-        self.q = np.clip(self.q + velocity * self.dt, self.robot.lower, self.robot.upper)
+        commanded = np.clip(actions, -1.0, 1.0) * self.action_scale
+        q, velocity = self.bound.step(self.q, self.velocity, commanded, self.dt)
+        goal = self.move_to(q, velocity)
+        shaping = np.asarray(self.scene.dense_reward(), dtype=float) if self.reward == "dense" else 0.0
+        reward = (goal + shaping + velocity_penalty(commanded, self.robot.velocity_limit)) / self.horizon
+        return self.observation(), reward, goal
+
+    def move_to(self, q: np.ndarray, velocity: np.ndarray | None = None) -> np.ndarray:
+        """One control step with the joints set to ``q`` (B, N) rad, reached at ``velocity`` (B, N)
+        rad/s (default: the difference from the last step's joints over dt); returns the goal
+        rewards (B,) after it. :meth:`step` moves through it, and so does a replay of joints
+        commanded open-loop (:mod:`toolimit.deploy.open_loop`), which bypasses the policy's bound."""
+        q = np.asarray(q, dtype=float).reshape(self.batch_size, self.n_joints)
+        self.velocity = (q - self.q) / self.dt if velocity is None else velocity
+        self.q = q
         self._update_tool()
         self.scene.step(ToolPose(self._position, self._rotation))
         self.t += 1
-        goal = np.asarray(self.scene.goal_reward(), dtype=float)
-        shaping = np.asarray(self.scene.dense_reward(), dtype=float) if self.reward == "dense" else 0.0
-        reward = (goal + shaping + velocity_penalty(velocity, self.robot.velocity_limit)) / self.horizon
-        return self.observation(), reward, goal
+        return np.asarray(self.scene.goal_reward(), dtype=float)
 
     @property
     def done(self) -> bool:

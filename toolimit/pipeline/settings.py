@@ -17,11 +17,13 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from toolimit.align.config import AlignmentConfig
-from toolimit.deploy.export import DEFAULT_RATE_HZ
-from toolimit.deploy.retime import DEFAULT_SUBDIVISIONS
-from toolimit.errors import InvalidSetting
+from toolimit.deploy.export import DEFAULT_RATE_HZ, RATE_RANGE_HZ
+from toolimit.deploy.open_loop import OPEN_LOOP_EPISODES
+from toolimit.deploy.retime import MAX_SUBDIVISIONS
+from toolimit.errors import InputError, InvalidSetting
 from toolimit.learn.evaluate import EVALUATION_SEED
 from toolimit.learn.training import LearningConfig
+from toolimit.robots.limits import Margins
 from toolimit.tools import tool_record, tool_records
 from toolimit.trajopt.problem import TrackingWeights
 from toolimit.trajopt.track import INITIALISATIONS, TrackOptions
@@ -147,16 +149,42 @@ class ExportSettings:
     Attributes:
         rate: command rate of the exported samples, Hz.
         subdivisions: pieces per step between optimised samples: more keeps closer to them at
-            sharp turns, and turns there more slowly.
+            sharp turns, and turns there more slowly; by default 1 for a path that keeps the
+            limits at its own timing (a learnt policy's), else 4.
+        position_margin: rad the commands keep from each end of every joint's range.
+        velocity_scale: fraction of the published velocity limits the commands stay within.
+        acceleration_scale: fraction of the published acceleration limits the commands stay within.
+        jerk_scale: fraction of the published jerk limits the commands stay within.
+        check_episodes: episodes of the open-loop replay of the export in the task's scene.
     """
 
     rate: float = DEFAULT_RATE_HZ
-    subdivisions: int = DEFAULT_SUBDIVISIONS
+    subdivisions: int | None = None
+    position_margin: float = Margins().position
+    velocity_scale: float = Margins().velocity
+    acceleration_scale: float = Margins().acceleration
+    jerk_scale: float = Margins().jerk
+    check_episodes: int = OPEN_LOOP_EPISODES
 
     def __post_init__(self) -> None:
-        if not 0 < self.rate < float("inf"):
-            raise InvalidSetting("rate", f"must be a positive number of Hz, got {self.rate}")
-        _check_integer("subdivisions", self.subdivisions, 1)
+        low, high = RATE_RANGE_HZ
+        if not low <= self.rate <= high:
+            raise InvalidSetting("rate", f"must be between {low:g} and {high:g} Hz, got {self.rate}")
+        if self.subdivisions is not None:
+            _check_integer("subdivisions", self.subdivisions, 1)
+            if self.subdivisions > MAX_SUBDIVISIONS:
+                raise InvalidSetting("subdivisions", f"must be at most {MAX_SUBDIVISIONS}, got {self.subdivisions}")
+        _check_integer("check_episodes", self.check_episodes, 1)
+        try:
+            Margins(self.position_margin, self.velocity_scale, self.acceleration_scale, self.jerk_scale)
+        except InputError as error:
+            field = {"position": "position_margin"}.get(str(error.args[0]), f"{error.args[0]}_scale")
+            raise InvalidSetting(field, str(error.args[1])) from None
+
+    @property
+    def margins(self) -> Margins:
+        """How far inside the robot's published limits the commands stay."""
+        return Margins(self.position_margin, self.velocity_scale, self.acceleration_scale, self.jerk_scale)
 
 
 @dataclass(frozen=True)

@@ -368,9 +368,10 @@ def export_stage(
     evaluation: PolicyEvaluation, out: str | Path, settings: ExportSettings = ExportSettings()
 ) -> Path | None:
     """The policy's first deterministic episode, joints (H+1, N) rad, saved in stage iii's format to
-    ``out/policy_rollout`` and, for a robot with published limits, retimed and written to
-    ``out/export`` (:func:`~toolimit.deploy.export_trajectory`); the export folder, or None for a
-    robot without published limits."""
+    ``out/policy_rollout`` and, for a robot with published limits, retimed, replayed open-loop in
+    the policy's task (its record in the export's JSON) and written to ``out/export``
+    (:func:`~toolimit.deploy.export_trajectory`); the export folder, or None for a robot without
+    published limits."""
     from toolimit.deploy import SUPPORTED_ROBOTS, export_trajectory, load_trajectory
 
     out = Path(out)
@@ -384,7 +385,10 @@ def export_stage(
         out / "export",
         rate=settings.rate,
         subdivisions=settings.subdivisions,
+        margins=settings.margins,
         source=str(rollout),
+        check=task,
+        check_episodes=settings.check_episodes,
     )
     return out / "export"
 

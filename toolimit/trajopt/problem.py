@@ -21,6 +21,7 @@ import pinocchio as pin
 
 from toolimit.errors import InputError, InvalidSetting
 from toolimit.robots import RobotModel
+from toolimit.robots.motion_bound import MotionBound
 from toolimit.tools import ToolPose
 from toolimit.trajopt.costs import CostTerm, Iterate, Point, PoseTerm, PostureTerm, VelocityTerm
 
@@ -154,8 +155,11 @@ class TrackingProblem:
         robot: the robot holding its tool.
         targets: target poses P_1..P_T.
         dt: time between targets, seconds.
-        q_start: (N,) joint configuration q_0 (fixed), radians; ``robot.q_neutral`` when None.
+        q_start: (N,) joint configuration q_0 (fixed), radians; ``robot.q_neutral`` when None;
+            clipped into the bound's range.
         weights: cost weights.
+        bound: the joints' range, velocity and acceleration bounds (hard constraints);
+            ``MotionBound.of(robot)`` when None, the bound the learning environment holds it to.
     """
 
     def __init__(
@@ -165,15 +169,18 @@ class TrackingProblem:
         dt: float,
         q_start: np.ndarray | None = None,
         weights: TrackingWeights = TrackingWeights(),
+        bound: MotionBound | None = None,
     ) -> None:
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be positive, got {dt}")
         q_start = robot.q_neutral if q_start is None else np.asarray(q_start, dtype=float)
         robot.check_configuration(q_start)
         self.robot = robot
+        self.bound = MotionBound.of(robot) if bound is None else bound
         self.targets = targets
         self.dt = float(dt)
-        self.q_start = q_start.copy()
+        # within the bound's range (the position margin: at most 0.01 rad from the model's limits)
+        self.q_start = np.clip(q_start, self.bound.lower, self.bound.upper)
         self.weights = weights
         self._w = weights.pose_diagonal
         self._model = robot.full_model

@@ -9,14 +9,23 @@ blocks), and the base is a column block shared by all steps. Constraints (the ma
 constant, only the bounds change):
 
 * joint limits ``lower <= q_t + dq_t <= upper``;
-* velocity limits ``|(q_t + dq_t - q_{t-1} - dq_{t-1}) / dt| <= vlim`` (``dq_0 = 0``).
+* velocity limits ``|(q_t + dq_t - q_{t-1} - dq_{t-1}) / dt| <= vlim`` (``dq_0 = 0``);
+* for a bound with an acceleration limit (:class:`~toolimit.robots.motion_bound.MotionBound`:
+  robots with published limits), ``|(q_{t+1} - 2 q_t + q_{t-1}) / dt^2| <= alim`` with the arm at
+  rest before the start (``q_{-1} = q_0``), so that the robot can execute the trajectory at its
+  timing (on the control grid, where learning replays it, the resampled steps keep the bound when
+  dt is the control step).
+
+The bounds are the problem's ``bound``: positions, velocities and accelerations the learning
+environment also holds the robot to.
 
 The step is damped Levenberg-Marquardt style (``mu |x|^2 / 2``, adapted from the ratio of actual to
 predicted decrease) and accepted by a backtracking line search on the true nonlinear J. Because
 constraints are linear and the current iterate feasible, every step length in [0, 1] stays
 feasible up to OSQP's tolerance; the accepted trajectory is then *projected* by a forward rollout
-(clip each velocity to its limit, then each position to its limits, and recompute the velocity),
-so returned trajectories satisfy the limits exactly (to floating-point rounding).
+(each step commanded through the bound: :meth:`MotionBound.step
+<toolimit.robots.motion_bound.MotionBound.step>`), so returned trajectories satisfy the limits
+exactly (to floating-point rounding).
 
 The condensed alternative (joint velocities as the only variables, positions as cumulative sums)
 makes P and A dense: on the benchmark problem (T = 92, N = 7) its first QP has 210k + 31k
@@ -45,6 +54,7 @@ import osqp
 import scipy.sparse as sp
 
 from toolimit.errors import InputError, SolverFailure
+from toolimit.robots.motion_bound import MotionBound
 from toolimit.trajopt.costs import Iterate, QuadraticModel
 from toolimit.trajopt.problem import TrackingProblem
 
@@ -120,25 +130,18 @@ class SqpOutcome:
     cost_history: tuple[float, ...]
 
 
-def project_to_limits(
-    q: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray, velocity_limit: np.ndarray
-) -> np.ndarray:
-    """Forward rollout of q (T+1, N) from q[0] that clips each velocity to +-velocity_limit, then
-    each position to [lower, upper]. q[0] must be within the limits; the result satisfies both.
-    Steps that satisfy both limits and follow an unchanged step are kept as they are."""
-    projected = np.array(q, dtype=float)
-    step = velocity_limit * dt
-    moves = np.diff(projected, axis=0)
-    violated = np.any((projected[1:] < lower) | (projected[1:] > upper) | (np.abs(moves) > step), axis=1)
-    changed = False  # whether the previous step was moved (then this one must be re-checked)
-    for t in np.arange(1, len(projected)):
-        if not (changed or violated[t - 1]):
-            continue
-        previous = projected[t - 1]
-        moved = previous + np.minimum(np.maximum(projected[t] - previous, -step), step)
-        moved = np.minimum(np.maximum(moved, lower), upper)
-        changed = bool(np.any(moved != projected[t]))
-        projected[t] = moved
+def project_to_limits(q: np.ndarray, dt: float, bound: MotionBound) -> np.ndarray:
+    """Forward rollout of q (T+1, N) from q[0] at rest that commands each step's move through
+    ``bound`` (velocity, acceleration, position range). q[0] must be within the range; the result
+    satisfies the bound. A trajectory that satisfies it already is returned as it is."""
+    q = np.asarray(q, dtype=float)
+    if bound.holds(q, dt):
+        return q.copy()
+    projected = q.copy()
+    velocity = np.zeros((1, q.shape[1]))
+    for t in range(1, len(q)):
+        moved, velocity = bound.step(projected[t - 1 : t], velocity, (q[t : t + 1] - projected[t - 1 : t]) / dt, dt)
+        projected[t] = moved[0]
     return projected
 
 
@@ -178,12 +181,23 @@ class _TrackingQp:
         self._tri = (tri_i, tri_j)
         self._base_tri = (base_i, base_j)
 
-        # Constraints: positions (identity on dq), then velocity differences / dt.
+        # Constraints: positions (identity on dq), velocity differences / dt, and for a bound with
+        # an acceleration limit the second differences / dt^2 (dq_0 = 0, at rest before the start).
         dt = problem.dt
-        identity = sp.identity(n * horizon, format="csc")
-        difference = sp.diags([np.ones(n * horizon), -np.ones(n * (horizon - 1))], [0, -n], format="csc") / dt
-        steps_block = sp.vstack([identity, difference], format="csc")
-        self.A = sp.hstack([sp.csc_matrix((2 * n * horizon, nb)), steps_block], format="csc")
+        size = n * horizon
+        blocks = [
+            sp.identity(size, format="csc"),
+            sp.diags([np.ones(size), -np.ones(size - n)], [0, -n], format="csc") / dt,
+        ]
+        if problem.bound.acceleration is not None:
+            blocks.append(
+                sp.diags(
+                    [np.ones(size), -2.0 * np.ones(size - n), np.ones(size - 2 * n)], [0, -n, -2 * n], format="csc"
+                )
+                / dt**2
+            )
+        steps_block = sp.vstack(blocks, format="csc")
+        self.A = sp.hstack([sp.csc_matrix((steps_block.shape[0], nb)), steps_block], format="csc")
         self.options = options
         self.solver: osqp.OSQP | None = None  # set up by the first solve
         self._duals = np.zeros(self.A.shape[0])  # the last QP's multipliers (warm start)
@@ -342,7 +356,7 @@ def _start(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The first iterate: base (3,) from the guess, q (T+1, N) from ``q_guess`` projected to the
     limits (q[0] = q_start), or q_start held."""
-    robot, horizon, n = problem.robot, problem.horizon, problem.n_joints
+    horizon, n = problem.horizon, problem.n_joints
     base = np.asarray(base_guess, dtype=float).copy()
     if base.shape != (3,) or not np.all(np.isfinite(base)):
         raise ValueError(f"base guess must be 3 finite numbers (x, y, yaw), got {base_guess}")
@@ -352,7 +366,7 @@ def _start(
     if q.shape != (horizon + 1, n):
         raise ValueError(f"q_guess must have shape ({horizon + 1}, {n}), got {q.shape}")
     q[0] = problem.q_start
-    return base, project_to_limits(q, problem.dt, robot.lower, robot.upper, robot.velocity_limit)
+    return base, project_to_limits(q, problem.dt, problem.bound)
 
 
 def _qp_step(
@@ -360,11 +374,17 @@ def _qp_step(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """The damped QP's step at ``at``: base step (nb,), joint-position steps (T, N), OSQP iterations.
     The bounds keep q + dq within the joint limits and its velocities within theirs."""
-    robot = problem.robot
+    bound = problem.bound
     models = [term.model(at) for term in problem.terms]
     velocity = at.velocity
-    bound_low = np.concatenate([(robot.lower - at.q[1:]).ravel(), (-robot.velocity_limit - velocity).ravel()])
-    bound_up = np.concatenate([(robot.upper - at.q[1:]).ravel(), (robot.velocity_limit - velocity).ravel()])
+    lows = [bound.lower - at.q[1:], -bound.velocity - velocity]
+    ups = [bound.upper - at.q[1:], bound.velocity - velocity]
+    if bound.acceleration is not None:
+        acceleration = np.diff(np.vstack([np.zeros((1, problem.n_joints)), velocity]), axis=0) / problem.dt
+        lows.append(-bound.acceleration - acceleration)
+        ups.append(bound.acceleration - acceleration)
+    bound_low = np.concatenate([low.ravel() for low in lows])
+    bound_up = np.concatenate([up.ravel() for up in ups])
     step, used = qp.solve(qp.hessian_values(models, damping), qp.gradient(models), bound_low, bound_up)
     return step[: qp.nb], step[qp.nb :].reshape(problem.horizon, problem.n_joints), used
 
@@ -392,14 +412,13 @@ def _line_search(
     """Backtracking on the true J from step length 1, halving: the first (base, q, J, length) with
     sufficient decrease (Armijo, 1e-4 of the predicted one), the trajectory projected to the limits;
     None when no length in ``options.line_search_steps`` gives one."""
-    robot = problem.robot
     length = 1.0
     for _ in range(options.line_search_steps):
         trial_base = base.copy()
         trial_base[qp.base_columns] += length * d_base
         trial_q = q.copy()
         trial_q[1:] += length * d_q
-        trial_q = project_to_limits(trial_q, problem.dt, robot.lower, robot.upper, robot.velocity_limit)
+        trial_q = project_to_limits(trial_q, problem.dt, problem.bound)
         trial_cost = problem.cost(trial_base, trial_q)
         if trial_cost <= cost - 1e-4 * length * predicted:
             return trial_base, trial_q, trial_cost, length

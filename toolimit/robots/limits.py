@@ -9,6 +9,12 @@ joint are supported: a real-robot export must not guess any of them.
 
 The UR5 is not supported: Universal Robots publish joint ranges (+-360 deg) and maximum speeds
 (180 deg/s) but no joint acceleration or jerk limits.
+
+:class:`Margins` says how far inside the published limits a robot is commanded: Franka's
+documentation states the limits as strict inequalities and aborts a motion that reaches one, and
+its users scale velocity and acceleration below them. The same margins bound what a learnt policy
+may command in simulation (:class:`MotionBound`) and what the export streams, so that the motion
+that succeeded in simulation is the one the robot executes, with no slowing down.
 """
 
 from __future__ import annotations
@@ -46,6 +52,23 @@ class JointLimits:
     jerk: np.ndarray
     source: str
 
+    def within(self, margins: Margins) -> JointLimits:
+        """These limits narrowed by ``margins``: positions moved inwards, derivatives scaled down."""
+        lower = self.position_lower + margins.position
+        upper = self.position_upper - margins.position
+        if np.any(lower >= upper):
+            raise InputError(f"a position margin of {margins.position} rad leaves no range on a joint of {self.robot}")
+        return JointLimits(
+            robot=self.robot,
+            joint_names=self.joint_names,
+            position_lower=lower,
+            position_upper=upper,
+            velocity=self.velocity * margins.velocity,
+            acceleration=self.acceleration * margins.acceleration,
+            jerk=self.jerk * margins.jerk,
+            source=f"{self.source}, within {margins.describe()}",
+        )
+
     def as_dict(self) -> dict:
         return {
             "robot": self.robot,
@@ -56,6 +79,54 @@ class JointLimits:
             "velocity_rad_s": self.velocity.tolist(),
             "acceleration_rad_s2": self.acceleration.tolist(),
             "jerk_rad_s3": self.jerk.tolist(),
+        }
+
+
+#: The largest position margin, rad: a margin, not another range.
+MAX_POSITION_MARGIN = 0.5
+
+
+class MarginError(InputError):
+    """A margin no export can use: ``args`` are the margin's name and the problem."""
+
+    def __str__(self) -> str:
+        return f"{self.args[0]} margin {self.args[1]}"
+
+
+@dataclass(frozen=True)
+class Margins:
+    """How far inside a robot's published limits it is commanded (see the module docstring).
+
+    Attributes:
+        position: rad kept from each end of every joint's range.
+        velocity, acceleration, jerk: fractions of the published limits, in (0, 1].
+    """
+
+    position: float = 0.01
+    velocity: float = 0.95
+    acceleration: float = 0.95
+    jerk: float = 0.95
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.position <= MAX_POSITION_MARGIN:
+            raise MarginError("position", f"must be between 0 and {MAX_POSITION_MARGIN} rad, got {self.position}")
+        for name in ("velocity", "acceleration", "jerk"):
+            scale = getattr(self, name)
+            if not 0.0 < scale <= 1.0:
+                raise MarginError(name, f"must be a fraction of the limit in (0, 1], got {scale}")
+
+    def describe(self) -> str:
+        return (
+            f"{self.position:g} rad of the position limits and {self.velocity:g}, {self.acceleration:g}, "
+            f"{self.jerk:g} of the velocity, acceleration and jerk limits"
+        )
+
+    def as_dict(self) -> dict[str, float]:
+        return {
+            "position_rad": self.position,
+            "velocity_scale": self.velocity,
+            "acceleration_scale": self.acceleration,
+            "jerk_scale": self.jerk,
         }
 
 

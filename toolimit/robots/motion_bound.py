@@ -1,0 +1,107 @@
+"""What a robot's joints can do in one control step: the bound on a commanded joint velocity.
+
+The paper's robot is kinematic: its joints move at the commanded velocity for one control step. A
+real arm cannot change its velocity faster than its acceleration limits, nor stop past a position
+limit. :class:`MotionBound` applies both to a commanded velocity, given the velocity of the step
+before: the velocity changes by at most ``acceleration * dt`` in a step and never exceeds the speed
+from which braking at that acceleration stops inside the position range. A motion stepped through
+it is one the robot can execute at its own timing: :mod:`toolimit.deploy.export` streams it with no
+slowing down. For a robot with published limits (:mod:`toolimit.robots.limits`) the bound is those
+limits within the export's margins; for the others, the model's position and velocity limits with
+no acceleration bound (none is published).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from toolimit.robots.limits import SUPPORTED_ROBOTS, JointLimits, Margins, published_limits
+from toolimit.robots.model import RobotModel
+
+
+@dataclass(frozen=True)
+class MotionBound:
+    """The joints' range and what one step may command (arrays (N,), in the robot's joint order).
+
+    Attributes:
+        lower, upper: position range, rad.
+        velocity: the largest |joint velocity|, rad/s (the velocity of an action of 1).
+        acceleration: the largest |change of joint velocity| per second, rad/s^2; None: no bound.
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray | None
+
+    @classmethod
+    def of(cls, robot: RobotModel, speed: float | None = None, margins: Margins = Margins()) -> MotionBound:
+        """The bound of ``robot`` (module docstring). ``speed``: every joint's velocity bound, rad/s,
+        and no acceleration bound, in the model's position range instead (the authors' span of
+        the action, beyond the Panda's own limits)."""
+        if speed is not None:
+            return cls(robot.lower.copy(), robot.upper.copy(), np.full(robot.n_joints, float(speed)), None)
+        if robot.name not in SUPPORTED_ROBOTS:
+            return cls.model(robot)
+        limits = published_limits(robot.name).within(margins)
+        if limits.joint_names != tuple(robot.joint_names):
+            raise ValueError(
+                f"{robot.name}'s published limits name joints {limits.joint_names}, not {robot.joint_names}"
+            )
+        return cls(
+            np.maximum(limits.position_lower, robot.lower),
+            np.minimum(limits.position_upper, robot.upper),
+            np.minimum(limits.velocity, robot.velocity_limit),
+            limits.acceleration,
+        )
+
+    @classmethod
+    def model(cls, robot: RobotModel) -> MotionBound:
+        """The model's own position and velocity limits, no acceleration bound (the paper's robot)."""
+        return cls(robot.lower.copy(), robot.upper.copy(), robot.velocity_limit.copy(), None)
+
+    @classmethod
+    def of_limits(cls, limits: JointLimits) -> MotionBound:
+        """The position, velocity and acceleration limits of ``limits`` (its jerk aside)."""
+        return cls(limits.position_lower, limits.position_upper, limits.velocity, limits.acceleration)
+
+    def holds(self, q: np.ndarray, dt: float) -> bool:
+        """Whether the joint path q (T+1, N) rad, one sample every ``dt`` s from rest, keeps the
+        range, the velocity and (if bounded) the acceleration, finite differences (rounding aside)."""
+        velocity = np.diff(q, axis=0) / dt
+        if np.any((q < self.lower) | (q > self.upper)) or np.any(np.abs(velocity) > self.velocity * (1 + 1e-12)):
+            return False
+        if self.acceleration is None:
+            return True
+        acceleration = np.diff(np.vstack([np.zeros((1, q.shape[1])), velocity]), axis=0) / dt
+        return bool(np.all(np.abs(acceleration) <= self.acceleration * (1 + 1e-9)))
+
+    def step(
+        self, q: np.ndarray, previous: np.ndarray, commanded: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The joints (B, N) rad and their velocity (B, N) rad/s after one step of ``dt`` s from
+        ``q`` (B, N) moving at ``previous`` (B, N), commanded ``commanded`` (B, N) rad/s."""
+        velocity = np.clip(commanded, -self.velocity, self.velocity)
+        if self.acceleration is not None:
+            change = self.acceleration * dt
+            slowest, fastest = previous - change, previous + change
+            # never faster towards a range's end than braking at the bound stops before it; braking
+            # harder than the bound allows is never asked
+            up = _braking_speed(np.maximum(self.upper - q, 0.0), change, dt)
+            down = _braking_speed(np.maximum(q - self.lower, 0.0), change, dt)
+            fastest = np.minimum(fastest, np.maximum(up, slowest))
+            slowest = np.maximum(slowest, np.minimum(-down, fastest))
+            velocity = np.clip(velocity, slowest, fastest)
+        moved = np.clip(q + velocity * dt, self.lower, self.upper)
+        return moved, (moved - q) / dt
+
+
+def _braking_speed(room: np.ndarray, change: np.ndarray, dt: float) -> np.ndarray:
+    """The largest speed (rad/s) for this step from which slowing by ``change`` rad/s every step
+    after it moves at most ``room`` rad in all: the steps' speeds v, v - u, v - 2u, ... (u =
+    ``change``) over their positive part, each for ``dt`` s. The n + 1 steps of a speed in
+    [n u, (n + 1) u] cover dt ((n + 1) v - u n (n + 1) / 2); n is the most whole steps of u that fit."""
+    whole = np.floor((np.sqrt(1.0 + 8.0 * room / (dt * change)) - 1.0) / 2.0)
+    return (room / dt + change * whole * (whole + 1.0) / 2.0) / (whole + 1.0)
