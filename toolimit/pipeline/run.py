@@ -24,6 +24,7 @@ from typing import Any
 from toolimit.align.outputs import ALIGNMENT_JSON, alignment_finished
 from toolimit.artifacts import save_json
 from toolimit.demos import ToolDemo
+from toolimit.deploy.export import SUMMARY_JSON
 from toolimit.distributed import RayTarget, ray_cluster
 from toolimit.errors import InputError
 from toolimit.learn.task import TASK_NPZ, LearningTask
@@ -112,15 +113,23 @@ def run_pipeline(
         "learning_time_s": learned["learning_time_s"],
         "early_stop": learned.get("early_stop"),
     }
-    save_json(out / EVALUATION_JSON, record)
     export = export_stage(evaluation, out, settings.export)
     report = on_stage or (lambda stage, line: None)
-    report(
-        "export",
-        f"retimed within the {robot}'s limits: {export}"
-        if export is not None
-        else f"skipped: the {robot} has no published acceleration and jerk limits (its rollout: {out / 'policy_rollout'})",
-    )
+    if export is None:
+        report(
+            "export",
+            f"skipped: the {robot} has no published acceleration and jerk limits (its rollout: {out / 'policy_rollout'})",
+        )
+    else:
+        summary = json.loads((export / SUMMARY_JSON).read_text())
+        record["exported"] = summary["open_loop"]
+        report(
+            "export",
+            f"retimed within the {robot}'s limits ({summary['duration_s']:.2f} s for the rollout's "
+            f"{summary['optimised_duration_s']:.2f} s): {export}; replayed open-loop: success "
+            f"{summary['open_loop']['success_rate']:.2f} over {summary['open_loop']['episodes']} episodes",
+        )
+    save_json(out / EVALUATION_JSON, record)
     return PipelineResult(out, record, export)
 
 
