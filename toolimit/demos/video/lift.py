@@ -11,11 +11,17 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    Or it is given: a known point of the plane (the hammer's nail).
 2. **The head** is its ray's intersection with that plane (closed form).
 3. **The handle end** lies on its own ray at the tool's length from the head: two solutions, the
-   near one (nearer to the camera than the foot of the head on that ray) and the far one. Dynamic
-   programming picks one per frame so that the handle's path is smoothest (least squared
-   acceleration); where both paths are equally smooth (the mirror image of a motion seen from the
-   side is as smooth as the motion), ``handle_hint`` decides, and without a hint the lift refuses
-   rather than return a mirrored demonstration.
+   near one (nearer to the camera than the foot of the head on that ray) and the far one, at a signed
+   depth offset ``s = -o`` or ``+o`` from that foot. The mirror image of a motion seen from one view
+   is as plausible as the motion, so the side is the user's knowledge (``handle_hint``), and a frame
+   leaves the hinted side only on evidence from the image (:func:`choose_sides`): the depth offset
+   crosses zero (the tool turns through the plane square to the handle's ray) and passing through
+   zero is smoother than bouncing back by ``SWITCH_EVIDENCE`` squared standard deviations of the
+   offset's noise. Nothing in one view tells the side of a whole stretch (the smoothness of the 3D
+   path, used before, chose the mirror image confidently on other cameras, and the real
+   recordings' handle ends go 14 cm under the ground, so the ground does not tell it either):
+   without a hint the lift refuses rather than return a mirrored demonstration, unless the two
+   solutions are negligibly apart. Each frame records its side's source and margin.
 4. **The handle's depth** along its ray is smoothed over time: its signed offset from the foot
    (+ far, - near) is filtered by a Gaussian in time. Where the ray grazes the sphere of the tool's length
    (a tool seen nearly side-on), the offset is the square root of a small noisy number: pixel noise
@@ -46,11 +52,18 @@ from toolimit.errors import InvalidSetting, TrackError
 
 #: ``handle_hint`` values: the handle end nearer to / farther from the camera than the head.
 HANDLE_HINTS = ("near", "far")
-#: With a hint, each frame whose handle end leaves the hinted side costs this times the squared
-#: separation of the two solutions (m^2, the unit of the squared accelerations): a run of frames
-#: leaves the hint only where the smooth path clearly crosses to the other side. Measured on the
-#: benchmark's synthetic hammer (3 px): 1e-3 (a tie-breaker) gave 10.8 deg of axis error, 1 gave 5.7.
-HINT_WEIGHT = 1.0
+#: A change of the handle end's side between two frames must make the path of its signed depth
+#: offset smoother by this many squared standard deviations of that path's noise (5 sigma): the
+#: evidence of a zero crossing that moves a frame off the hinted side (or, without a hint, links the
+#: sides of two stretches).
+SWITCH_EVIDENCE = 25.0
+#: Per frame off the hinted side, a cost (squared standard deviations) that keeps a frame on the hint
+#: where the image shows nothing.
+HINT_COST = 0.01
+#: Separations of the two solutions below this (metres) change nothing that matters.
+NEGLIGIBLE_OFFSET = 0.005
+#: Where each frame's side comes from (``LiftedDemo.side_source``).
+SIDE_SOURCES = ("hint", "crossing", "negligible")
 #: The pixel filter widths (frames, Gaussian standard deviation) cross-validation chooses from:
 #: 0.5 to 8 frames in steps of sqrt(2).
 PIXEL_WIDTHS = tuple(0.5 * 2 ** (k / 2) for k in range(9))
@@ -61,11 +74,16 @@ class LiftSettings:
     """How tracks are lifted to 3D (``toolimit demo lift``).
 
     Attributes:
-        handle_hint: where the handle end is when the image cannot tell: "near" (nearer to the
-            camera than the head) or "far"; None refuses a mirror ambiguity.
+        handle_hint: the side of the head the handle end is on, the user's knowledge: "near"
+            (nearer to the camera than the head) or "far"; each frame keeps it unless the image
+            shows otherwise. None: the image alone decides, or the lift refuses.
         tool_length: head to handle end, metres (None: the tool's registered length).
         plane_point: a world point (x, y, z metres) on the head's working plane (None: the plane
             from the frames where the head touches the ground).
+        plane_normal: the working plane's horizontal normal (x, y, world; its length and sign do
+            not matter), the user's knowledge of the motion's direction, e.g. a calibration board
+            laid along it (None: the camera's viewing direction made horizontal, a camera facing
+            the motion).
         contact_share: share of the head's frames taken as its ground contacts (the nearest
             ray-ground meetings).
         pixel_noise: standard deviation of the tracks' pixel error, for the per-frame uncertainty.
@@ -76,19 +94,17 @@ class LiftSettings:
         offset_smoothing: standard deviation, in frames, of the Gaussian filter run along the
             handle end's signed depth offset after the near/far choice (0: none).
         min_visible_share: each end must be visible in at least this share of the frames.
-        mirror_ratio: the mirrored handle path counts as an equal explanation when its squared
-            acceleration is less than this many times the best path's.
     """
 
     handle_hint: str | None = None
     tool_length: float | None = None
     plane_point: tuple[float, float, float] | None = None
+    plane_normal: tuple[float, float] | None = None
     contact_share: float = 0.05
     pixel_noise: float = 3.0
     smoothing: float | None = None
     offset_smoothing: float = 1.0
     min_visible_share: float = 0.5
-    mirror_ratio: float = 1.5
 
     def __post_init__(self) -> None:
         if self.handle_hint is not None and self.handle_hint not in HANDLE_HINTS:
@@ -99,6 +115,14 @@ class LiftSettings:
             len(self.plane_point) != 3 or not all(math.isfinite(value) for value in self.plane_point)
         ):
             raise InvalidSetting("plane_point", f"expected three finite coordinates x, y, z, got {self.plane_point!r}")
+        if self.plane_normal is not None and (
+            len(self.plane_normal) != 2
+            or not all(math.isfinite(value) for value in self.plane_normal)
+            or math.hypot(*self.plane_normal) == 0
+        ):
+            raise InvalidSetting(
+                "plane_normal", f"expected two finite coordinates x, y, not both 0, got {self.plane_normal!r}"
+            )
         if not 0 < self.contact_share <= 1:
             raise InvalidSetting("contact_share", f"must be in (0, 1], got {self.contact_share!r}")
         if not (math.isfinite(self.pixel_noise) and self.pixel_noise >= 0):
@@ -113,8 +137,6 @@ class LiftSettings:
             )
         if not 0 < self.min_visible_share <= 1:
             raise InvalidSetting("min_visible_share", f"must be in (0, 1], got {self.min_visible_share!r}")
-        if not self.mirror_ratio >= 1:
-            raise InvalidSetting("mirror_ratio", f"must be at least 1, got {self.mirror_ratio!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,9 +150,18 @@ class LiftedDemo:
         head_filled, handle_filled: (T,) bool, frames where that end was not visible and was
             interpolated.
         handle_far: (T,) bool, whether the far solution was taken for the handle end.
+        side_source: (T,) str, what set each frame's side (``SIDE_SOURCES``): "hint" (the image shows
+            nothing against the hint), "crossing" (a zero crossing of the depth offset moved it off
+            the hint), "negligible"
+            (the two solutions are within ``NEGLIGIBLE_OFFSET`` all along its stretch).
+        side_margin: (T,) how much worse, in squared standard deviations of the image's evidence
+            (:func:`choose_sides`), the frame's stretch would be on the other side; about
+            ``HINT_COST`` per frame where only the hint holds it.
+        mirror_distance: (T,) metres between the handle end and its mirror solution (twice the
+            depth offset): the error of a frame on the wrong side.
         plane_normal: (3,) horizontal unit normal of the working plane, pointing away from the camera.
         plane_distance: the plane's distance from the camera's centre along that normal, metres.
-        hint_used: whether the handle's sides came from ``handle_hint`` (a mirror ambiguity).
+        hint_used: whether any frame's side came from ``handle_hint`` alone.
         pixel_smoothing: the pixel filter's width for the head and for the handle end, frames.
     """
 
@@ -140,6 +171,9 @@ class LiftedDemo:
     head_filled: np.ndarray
     handle_filled: np.ndarray
     handle_far: np.ndarray
+    side_source: np.ndarray
+    side_margin: np.ndarray
+    mirror_distance: np.ndarray
     plane_normal: np.ndarray
     plane_distance: float
     hint_used: bool
@@ -210,7 +244,7 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     forward = camera.rotation[:, 2]
     if np.linalg.norm(forward[:2]) < 1e-3:
         raise TrackError("camera: it looks straight up or down; the lift needs a camera facing the working plane")
-    normal = np.array([forward[0], forward[1], 0.0]) / np.linalg.norm(forward[:2])
+    normal = _plane_normal(forward, settings.plane_normal)
 
     head_frames = np.flatnonzero(tracks.head_visible)
     head_rays = camera.rays(tracks.head[head_frames])
@@ -223,30 +257,20 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     handle_frames = np.flatnonzero(tracks.handle_visible)
     handle_rays = camera.rays(tracks.handle[handle_frames])
     near, far, offset = handle_candidates(origin, handle_rays, head[handle_frames], length)
-    far_chosen, hint_used = _handle_sides(near, far, offset, settings)
-    signed = np.where(far_chosen, offset, -offset)
+    head_moves = _head_moves(camera, tracks, head_frames, normal, distance, distance_sigma, settings, widths[0])
+    offset_sigma = _handle_spreads(camera, tracks, handle_frames, head, head_moves, length, settings, widths[1])[2]
+    sides = choose_sides(near, far, offset, offset_sigma, settings.handle_hint)
+    signed = np.where(sides.far, offset, -offset)
     if settings.offset_smoothing > 0:
         signed = _filtered(signed[:, None], handle_frames, tracks.n_frames, settings.offset_smoothing)[handle_frames, 0]
-    far_chosen = signed > 0
     foot, _ = squared_offset(origin, handle_rays, head[handle_frames], length)
     handle = _filled(_on_ray(origin, handle_rays, foot + signed), handle_frames, tracks.n_frames)
     axis = handle - head
     handle = head + length * axis / np.linalg.norm(axis, axis=1, keepdims=True)
 
-    head_sigma, handle_sigma = _uncertainty(
-        camera,
-        tracks,
-        head_frames,
-        handle_frames,
-        head,
-        handle,
-        normal,
-        distance,
-        distance_sigma,
-        length,
-        settings,
-        widths,
-    )
+    head_sigma = np.sqrt(sum(np.sum((moved - head) ** 2, axis=1) for moved in head_moves))
+    handle_sigma = _handle_sigma(camera, tracks, handle_frames, head, handle, head_moves, length, settings, widths[1])
+    nearest = _nearest(handle_frames, tracks.n_frames)
     demo = ToolDemo(head, handle, fps, tool, source=f"lifted from 2D tracks ({tracks.n_frames} frames)")
     return LiftedDemo(
         demo=demo,
@@ -254,12 +278,48 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
         handle_sigma=handle_sigma,
         head_filled=~tracks.head_visible,
         handle_filled=~tracks.handle_visible,
-        handle_far=_filled(far_chosen[:, None].astype(float), handle_frames, tracks.n_frames)[:, 0] > 0.5,
+        handle_far=_filled(
+            np.where(signed != 0, signed > 0, sides.far)[:, None].astype(float), handle_frames, tracks.n_frames
+        )[:, 0]
+        > 0.5,
+        side_source=sides.source[nearest],
+        side_margin=sides.margin[nearest],
+        mirror_distance=_filled(2 * offset[:, None], handle_frames, tracks.n_frames)[:, 0],
         plane_normal=normal,
         plane_distance=distance,
-        hint_used=hint_used,
+        hint_used=settings.handle_hint is not None and bool(np.any(sides.source == "hint")),
         pixel_smoothing=widths,
     )
+
+
+def _nearest(frames: np.ndarray, n_frames: int) -> np.ndarray:
+    """(n_frames,) the index into ``frames`` (sorted) of the nearest one to each frame."""
+    every = np.arange(n_frames)
+    after = np.clip(np.searchsorted(frames, every), 0, len(frames) - 1)
+    before = np.clip(after - 1, 0, len(frames) - 1)
+    return np.where(np.abs(frames[before] - every) <= np.abs(frames[after] - every), before, after)
+
+
+#: The working plane must face the camera within this angle (degrees) of its viewing direction.
+MAX_PLANE_ANGLE = 75.0
+
+
+def _plane_normal(forward: np.ndarray, given: tuple[float, float] | None) -> np.ndarray:
+    """(3,) the working plane's horizontal unit normal, pointing away from the camera (viewing
+    direction ``forward`` (3,), world): ``given`` (x, y) or the viewing direction made horizontal."""
+    facing = np.array([forward[0], forward[1], 0.0]) / np.linalg.norm(forward[:2])
+    if given is None:
+        return facing
+    normal = np.array([given[0], given[1], 0.0]) / math.hypot(*given)
+    if normal @ facing < 0:
+        normal = -normal
+    angle = math.degrees(math.acos(min(1.0, float(normal @ facing))))
+    if angle > MAX_PLANE_ANGLE:
+        raise TrackError(
+            f"plane_normal {given}: the working plane is seen {90 - angle:.0f} deg from edge-on (its normal "
+            f"{angle:.0f} deg from the camera's viewing direction, at most {MAX_PLANE_ANGLE:g})"
+        )
+    return normal
 
 
 def pixel_widths(tracks: EndpointTracks, smoothing: float | None) -> tuple[float, float]:
@@ -393,129 +453,182 @@ def _filled(points: np.ndarray, frames: np.ndarray, n_frames: int) -> np.ndarray
     return np.stack([np.interp(every, frames, points[:, k]) for k in range(points.shape[1])], axis=1)
 
 
-def _smoothest_sides(near: np.ndarray, far: np.ndarray, preferred: np.ndarray | None) -> tuple[np.ndarray, float]:
-    """Per frame, far (True) or near: the choice whose path has the least summed squared
-    acceleration (dynamic programming over the pair of the last two choices), plus, with
-    ``preferred`` (N,) bool, a tie-breaking cost for every frame that leaves it. Returns the
-    choice and its acceleration cost."""
-    candidates = np.stack([near, far], axis=1)  # (N, 2, 3)
-    n = len(candidates)
-    if n < 3:
-        return np.zeros(n, dtype=bool), 0.0
-    # cost[a, b]: best cost of a path whose last two choices are a (frame t-1) and b (frame t)
-    bias = np.zeros((n, 2)) if preferred is None else _leave_cost(candidates, preferred)
-    cost = bias[0][:, None] + bias[1][None, :]
-    back = np.zeros((n, 2, 2), dtype=int)
-    for t in range(2, n):
-        # acceleration[a, b, c] for choices a, b, c at frames t-2, t-1, t
-        acceleration = (
-            candidates[t][None, None, :, :]
-            - 2 * candidates[t - 1][None, :, None, :]
-            + candidates[t - 2][:, None, None, :]
+@dataclass(frozen=True, eq=False)
+class SideChoice:
+    """Each visible handle frame's side and why (see :class:`LiftedDemo`).
+
+    Attributes:
+        far: (m,) bool, the far solution taken.
+        source: (m,) str, one of ``SIDE_SOURCES``.
+        margin: (m,) the cost (squared standard deviations) of turning the frame's stretch over.
+    """
+
+    far: np.ndarray
+    source: np.ndarray
+    margin: np.ndarray
+
+
+def choose_sides(
+    near: np.ndarray, far: np.ndarray, offset: np.ndarray, offset_sigma: np.ndarray, hint: str | None
+) -> SideChoice:
+    """The side of each visible handle frame, from the near and far solutions ``near``, ``far``
+    (m, 3) world metres, their depth offset ``offset`` (m,) metres from the head's foot on the ray
+    and its standard uncertainty ``offset_sigma`` (m,) metres, and the user's ``hint``.
+
+    Dynamic programming over the signed offsets ``s = +-offset`` minimises, in squared standard
+    deviations: the second differences of ``s`` over their noise (a stretch and its mirror are
+    equally smooth, so this term only weighs where the side changes: through a zero crossing of
+    ``s``, or a bounce off zero), ``SWITCH_EVIDENCE`` per change of side and ``HINT_COST`` per frame
+    off the hint. Each stretch between changes gets the cost of turning it over as its margin.
+
+    Raises:
+        TrackError: no hint, and the two solutions more than ``NEGLIGIBLE_OFFSET`` apart in some frame:
+            a mirror ambiguity.
+    """
+    m = len(offset)
+    if hint is None and np.max(offset) >= NEGLIGIBLE_OFFSET:
+        worst = int(np.argmax(offset))
+        raise TrackError(
+            "tracks: mirror ambiguity: one view gives a motion and its mirror image, and the image does not tell "
+            f"on which side of the head the handle end is (the two sides differ by up to {2 * offset[worst]:.2f} m); "
+            "say which with --handle-hint near|far (LiftSettings.handle_hint)"
         )
-        total = cost[:, :, None] + np.sum(acceleration**2, axis=-1) + bias[t][None, None, :]
+    sigma = np.maximum(offset_sigma, 1e-3)
+    unary = np.zeros((m, 2))
+    if hint is not None:
+        unary[:, 0 if hint == "far" else 1] += HINT_COST
+    acceleration_sigma = np.sqrt(sigma[2:] ** 2 + 4 * sigma[1:-1] ** 2 + sigma[:-2] ** 2)
+    choice = _cheapest_sides(offset, acceleration_sigma, unary)
+    cost = _side_cost(choice, offset, acceleration_sigma, unary)
+    margin = np.zeros(m)
+    source = np.empty(m, dtype="<U10")
+    changes = np.flatnonzero(np.diff(choice)) + 1
+    for start, stop in zip(np.r_[0, changes], np.r_[changes, m]):
+        turned = choice.copy()
+        turned[start:stop] = 1 - turned[start:stop]
+        margin[start:stop] = _side_cost(turned, offset, acceleration_sigma, unary) - cost
+        if np.max(offset[start:stop]) < NEGLIGIBLE_OFFSET:
+            source[start:stop] = "negligible"
+        elif hint is not None and np.all(choice[start:stop] == (hint == "far")):
+            source[start:stop] = "hint"
+        else:
+            source[start:stop] = "crossing"
+    return SideChoice(far=choice.astype(bool), source=source, margin=margin)
+
+
+def _cheapest_sides(offset: np.ndarray, acceleration_sigma: np.ndarray, unary: np.ndarray) -> np.ndarray:
+    """(m,) int, 1 far / 0 near: the choice of least :func:`_side_cost` (dynamic programming over
+    the pair of the last two choices)."""
+    m = len(offset)
+    if m < 3:
+        return np.argmin(unary, axis=1)
+    signed = np.stack([-offset, offset], axis=1)  # (m, 2)
+    switch = SWITCH_EVIDENCE * (np.arange(2)[:, None] != np.arange(2)[None, :])
+    # cost[a, b]: best cost of a path whose choices at frames t-1, t are a, b
+    cost = unary[0][:, None] + unary[1][None, :] + switch
+    back = np.zeros((m, 2, 2), dtype=int)
+    for t in range(2, m):
+        second = (
+            signed[t][None, None, :] - 2 * signed[t - 1][None, :, None] + signed[t - 2][:, None, None]
+        ) / acceleration_sigma[t - 2]
+        total = cost[:, :, None] + second**2 + switch[None, :, :] + unary[t][None, None, :]
         back[t] = np.argmin(total, axis=0)
         cost = np.min(total, axis=0)
     last = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    choice = np.zeros(n, dtype=int)
+    choice = np.zeros(m, dtype=int)
     choice[-2], choice[-1] = last
-    for t in range(n - 1, 1, -1):
+    for t in range(m - 1, 1, -1):
         choice[t - 2] = back[t, choice[t - 1], choice[t]]
-    far_chosen = choice.astype(bool)
-    return far_chosen, _acceleration_cost(np.where(far_chosen[:, None], far, near))
+    return choice
 
 
-def _leave_cost(candidates: np.ndarray, preferred: np.ndarray) -> np.ndarray:
-    """(N, 2) the cost of leaving ``preferred`` (N,) bool (True: far) at each frame, ``HINT_WEIGHT``
-    times the two solutions' squared separation."""
-    separation = np.sum((candidates[:, 1] - candidates[:, 0]) ** 2, axis=1)
-    bias = np.zeros((len(candidates), 2))
-    bias[np.arange(len(candidates)), (~preferred).astype(int)] = HINT_WEIGHT * separation
-    return bias
+def _side_cost(choice: np.ndarray, offset: np.ndarray, acceleration_sigma: np.ndarray, unary: np.ndarray) -> float:
+    """The cost :func:`choose_sides` minimises for ``choice`` (m,) int (1 far)."""
+    signed = np.where(choice == 1, offset, -offset)
+    smooth = np.sum((np.diff(signed, n=2) / acceleration_sigma) ** 2) if len(signed) > 2 else 0.0
+    changes = np.count_nonzero(np.diff(choice))
+    return float(smooth + SWITCH_EVIDENCE * changes + np.sum(unary[np.arange(len(choice)), choice]))
 
 
-def _acceleration_cost(path: np.ndarray) -> float:
-    return float(np.sum(np.diff(path, n=2, axis=0) ** 2))
-
-
-def _handle_sides(
-    near: np.ndarray, far: np.ndarray, offset: np.ndarray, settings: LiftSettings
-) -> tuple[np.ndarray, bool]:
-    """Far (True) or near per visible handle frame, and whether the hint decided."""
-    far_chosen, cost = _smoothest_sides(near, far, None)
-    mirrored = _acceleration_cost(np.where(far_chosen[:, None], near, far))
-    # Separations below a centimetre change nothing that matters: no ambiguity to report.
-    ambiguous = mirrored <= settings.mirror_ratio * cost + 1e-12 and np.max(offset) > 0.005
-    if not ambiguous:
-        return far_chosen, False
-    if settings.handle_hint is None:
-        worst = int(np.argmax(offset))
-        raise TrackError(
-            "tracks: mirror ambiguity: the handle end nearer to and farther from the camera than the head are "
-            f"equally smooth (squared acceleration {cost:.4g} and {mirrored:.4g} m^2; the two differ by up to "
-            f"{2 * offset[worst]:.2f} m); say which with --handle-hint near|far (LiftSettings.handle_hint)"
-        )
-    preferred = np.full(len(near), settings.handle_hint == "far")
-    far_chosen, _ = _smoothest_sides(near, far, preferred)
-    return far_chosen, True
-
-
-def _uncertainty(
+def _head_moves(
     camera: Camera,
     tracks: EndpointTracks,
     head_frames: np.ndarray,
-    handle_frames: np.ndarray,
-    head: np.ndarray,
-    handle: np.ndarray,
     normal: np.ndarray,
     distance: float,
     distance_sigma: float,
-    length: float,
     settings: LiftSettings,
-    widths: tuple[float, float],
-) -> tuple[np.ndarray, np.ndarray]:
-    """(T,) standard uncertainty of head and handle end, metres: the changes caused by moving each
-    pixel coordinate of either end by the track noise left after that end's filter of ``widths``
-    (head, handle end; :func:`_pixel_steps`) and the plane by its
-    distance's uncertainty, added in quadrature (finite
-    differences of the lift itself); interpolated over the frames an end is not seen.
-
-    The handle end's: its ray's sideways move at its range, the move of the head's foot on the ray,
-    and the spread of its depth offset ``sqrt(q)`` from the foot (``q``: :func:`squared_offset`,
-    moved by both ends' pixels and the plane): the half-width of the image of ``q``'s +-1-sigma
-    interval, which is the linear ``sigma_q / (2 sqrt(q))`` away from the tangent and stays finite
-    (``sqrt(sigma_q) / 2``) where the ray grazes the tool-length sphere, where a finite difference
-    clamped at the tangent reports almost nothing."""
+    width: float,
+) -> list[np.ndarray]:
+    """The lifted head (T, 3 each) with the plane moved by its distance's uncertainty and with each
+    pixel coordinate moved by the track noise left after the head's filter of ``width`` frames."""
     origin, n_frames = camera.centre, tracks.n_frames
-    head_steps, handle_steps = (_pixel_steps(settings.pixel_noise, width) for width in widths)
     head_pixels = tracks.head[head_frames]
 
     def head_at(pixels: np.ndarray, plane: float) -> np.ndarray:
         return _filled(ray_plane_intersection(origin, camera.rays(pixels), normal, plane), head_frames, n_frames)
 
-    head_moves = [head_at(head_pixels, distance + distance_sigma)] + [
-        head_at(head_pixels + step, distance) for step in head_steps
+    return [head_at(head_pixels, distance + distance_sigma)] + [
+        head_at(head_pixels + step, distance) for step in _pixel_steps(settings.pixel_noise, width)
     ]
-    head_sigma = np.sqrt(sum(np.sum((moved - head) ** 2, axis=1) for moved in head_moves))
 
+
+def _handle_spreads(
+    camera: Camera,
+    tracks: EndpointTracks,
+    handle_frames: np.ndarray,
+    head: np.ndarray,
+    head_moves: list[np.ndarray],
+    length: float,
+    settings: LiftSettings,
+    width: float,
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """For the visible handle frames, under each move of :func:`_head_moves` and of the handle's
+    pixels by the track noise left after its filter of ``width`` frames: the moved rays (list of
+    (m, 3)), the spread of the head's foot on the ray (m,) metres and the spread of the depth offset
+    ``sqrt(q)`` (m,) metres (``q``: :func:`squared_offset`): the half-width of the image of ``q``'s
+    +-1-sigma interval, which is the linear ``sigma_q / (2 sqrt(q))`` away from the tangent and
+    stays finite (``sqrt(sigma_q) / 2``) where the ray grazes the tool-length sphere."""
+    origin = camera.centre
     handle_pixels = tracks.handle[handle_frames]
     heads = head[handle_frames]
     rays = camera.rays(handle_pixels)
     foot, squared_depth = squared_offset(origin, rays, heads, length)
-    ranges = np.sum(rays * (handle[handle_frames] - origin), axis=1)
     moves = [(rays, moved[handle_frames]) for moved in head_moves]
-    moves += [(camera.rays(handle_pixels + step), heads) for step in handle_steps]
-    sideways = foot_spread = depth_spread = np.zeros(len(handle_frames))
+    moves += [(camera.rays(handle_pixels + step), heads) for step in _pixel_steps(settings.pixel_noise, width)]
+    foot_spread = depth_spread = np.zeros(len(handle_frames))
     for moved_rays, moved_heads in moves:
         moved_foot, moved_depth = squared_offset(origin, moved_rays, moved_heads, length)
-        sideways = sideways + np.sum(((moved_rays - rays) * ranges[:, None]) ** 2, axis=1)
         foot_spread = foot_spread + (moved_foot - foot) ** 2
         depth_spread = depth_spread + (moved_depth - squared_depth) ** 2
     depth_spread = np.sqrt(depth_spread)
     positive = np.maximum(squared_depth, 0.0)
     offset_spread = (np.sqrt(positive + depth_spread) - np.sqrt(np.maximum(positive - depth_spread, 0.0))) / 2
-    seen = np.sqrt(sideways + foot_spread + offset_spread**2)
-    return head_sigma, _filled(seen[:, None], handle_frames, n_frames)[:, 0]
+    return [moved_rays for moved_rays, _ in moves], np.sqrt(foot_spread), offset_spread
+
+
+def _handle_sigma(
+    camera: Camera,
+    tracks: EndpointTracks,
+    handle_frames: np.ndarray,
+    head: np.ndarray,
+    handle: np.ndarray,
+    head_moves: list[np.ndarray],
+    length: float,
+    settings: LiftSettings,
+    width: float,
+) -> np.ndarray:
+    """(T,) the handle end's standard uncertainty, metres, its side taken as right: its ray's
+    sideways move at its range, the move of the head's foot on the ray and the depth offset's
+    spread (:func:`_handle_spreads`), in quadrature; interpolated over the frames it is not seen."""
+    rays = camera.rays(tracks.handle[handle_frames])
+    ranges = np.sum(rays * (handle[handle_frames] - camera.centre), axis=1)
+    moved_rays, foot_spread, offset_spread = _handle_spreads(
+        camera, tracks, handle_frames, head, head_moves, length, settings, width
+    )
+    sideways = sum(np.sum(((moved - rays) * ranges[:, None]) ** 2, axis=1) for moved in moved_rays)
+    seen = np.sqrt(sideways + foot_spread**2 + offset_spread**2)
+    return _filled(seen[:, None], handle_frames, tracks.n_frames)[:, 0]
 
 
 def _pixel_steps(noise: float, width: float) -> tuple[np.ndarray, np.ndarray]:
