@@ -15,9 +15,8 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    depth offset ``s = -o`` or ``+o`` from that foot. The mirror image of a motion seen from one view
    is as plausible as the motion, so the side is the user's knowledge (``handle_hint``), and a frame
    leaves the hinted side only on evidence from the image (:func:`choose_sides`): the depth offset
-   crosses zero (the tool turns through the plane square to the handle's ray) and passing through
-   zero is smoother than bouncing back by ``SWITCH_EVIDENCE`` squared standard deviations of the
-   offset's noise. Nothing in one view tells the side of a whole stretch (the smoothness of the 3D
+   crosses zero (the tool turns through the plane square to the handle's ray) and the frames around
+   fit a crossing better than a bounce by ``SWITCH_EVIDENCE`` squared standard deviations. Nothing in one view tells the side of a whole stretch (the smoothness of the 3D
    path, used before, chose the mirror image confidently on other cameras, and the real
    recordings' handle ends go 14 cm under the ground, so the ground does not tell it either):
    without a hint the lift refuses rather than return a mirrored demonstration, unless the two
@@ -52,16 +51,16 @@ from toolimit.errors import InvalidSetting, TrackError
 
 #: ``handle_hint`` values: the handle end nearer to / farther from the camera than the head.
 HANDLE_HINTS = ("near", "far")
-#: A change of the handle end's side between two frames must make the path of its signed depth
-#: offset smoother by this many squared standard deviations of that path's noise (5 sigma): the
-#: evidence of a zero crossing that moves a frame off the hinted side (or, without a hint, links the
-#: sides of two stretches).
+#: A zero crossing of the handle's depth offset moves frames off the hinted side when a bounce fits
+#: the frames around it worse than a crossing by this many squared standard deviations (5 sigma).
 SWITCH_EVIDENCE = 25.0
-#: Per frame off the hinted side, a cost (squared standard deviations) that keeps a frame on the hint
-#: where the image shows nothing.
-HINT_COST = 0.01
+#: Frames each side of a graze fitted to tell a crossing from a bounce.
+CROSSING_WINDOW = 6
 #: Separations of the two solutions below this (metres) change nothing that matters.
 NEGLIGIBLE_OFFSET = 0.005
+#: A handle ray passing farther than the tool's length plus this (metres) from the lifted head
+#: misses the tool: in more than ``MAX_MISSED_SHARE`` of the frames, the working plane is wrong.
+MISS_MARGIN, MAX_MISSED_SHARE = 0.05, 0.2
 #: Where each frame's side comes from (``LiftedDemo.side_source``).
 SIDE_SOURCES = ("hint", "crossing", "negligible")
 #: The pixel filter widths (frames, Gaussian standard deviation) cross-validation chooses from:
@@ -154,9 +153,8 @@ class LiftedDemo:
             nothing against the hint), "crossing" (a zero crossing of the depth offset moved it off
             the hint), "negligible"
             (the two solutions are within ``NEGLIGIBLE_OFFSET`` all along its stretch).
-        side_margin: (T,) how much worse, in squared standard deviations of the image's evidence
-            (:func:`choose_sides`), the frame's stretch would be on the other side; about
-            ``HINT_COST`` per frame where only the hint holds it.
+        side_margin: (T,) the image's evidence for a frame off the hinted side: the weakest zero
+            crossing's (:func:`choose_sides`), squared standard deviations; 0 where the hint holds.
         mirror_distance: (T,) metres between the handle end and its mirror solution (twice the
             depth offset): the error of a frame on the wrong side.
         plane_normal: (3,) horizontal unit normal of the working plane, pointing away from the camera.
@@ -257,6 +255,7 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     handle_frames = np.flatnonzero(tracks.handle_visible)
     handle_rays = camera.rays(tracks.handle[handle_frames])
     near, far, offset = handle_candidates(origin, handle_rays, head[handle_frames], length)
+    _check_plane_fits(origin, handle_rays, head[handle_frames], length)
     head_moves = _head_moves(camera, tracks, head_frames, normal, distance, distance_sigma, settings, widths[0])
     offset_sigma = _handle_spreads(camera, tracks, handle_frames, head, head_moves, length, settings, widths[1])[2]
     sides = choose_sides(near, far, offset, offset_sigma, settings.handle_hint)
@@ -395,6 +394,21 @@ def _filtered(values: np.ndarray, frames: np.ndarray, n_frames: int, width: floa
     return gaussian_filter1d(padded, width, axis=0, mode="nearest")[pad : pad + n_frames]
 
 
+def _check_plane_fits(origin: np.ndarray, rays: np.ndarray, heads: np.ndarray, length: float) -> None:
+    """TrackError when the handle's rays (m, 3) pass farther than ``length + MISS_MARGIN`` metres
+    from the lifted heads (m, 3) in more than ``MAX_MISSED_SHARE`` of the frames: no tool of that
+    length joins them, so the working plane is not where the head moves."""
+    _, squared = squared_offset(origin, rays, heads, length)
+    missed = squared < length**2 - (length + MISS_MARGIN) ** 2
+    if np.mean(missed) > MAX_MISSED_SHARE:
+        raise TrackError(
+            f"tracks: the working plane does not fit: in {int(np.sum(missed))} of {len(missed)} frames the handle "
+            f"end's ray passes more than {MISS_MARGIN:g} m beyond the tool's length ({length:g} m) from the lifted "
+            "head; if the motion is not square to the camera, give its plane's normal (--plane-normal x,y), or a "
+            "point of it (--plane-point x,y,z)"
+        )
+
+
 def _check_visible(tracks: EndpointTracks, min_share: float) -> None:
     """TrackError unless each end is visible in enough frames to lift and interpolate."""
     needed = max(MIN_FRAMES, math.ceil(min_share * tracks.n_frames))
@@ -460,7 +474,8 @@ class SideChoice:
     Attributes:
         far: (m,) bool, the far solution taken.
         source: (m,) str, one of ``SIDE_SOURCES``.
-        margin: (m,) the cost (squared standard deviations) of turning the frame's stretch over.
+        margin: (m,) the evidence (squared standard deviations) of the weakest zero crossing between
+            the frame and the hinted side; 0 on the hinted side.
     """
 
     far: np.ndarray
@@ -471,15 +486,19 @@ class SideChoice:
 def choose_sides(
     near: np.ndarray, far: np.ndarray, offset: np.ndarray, offset_sigma: np.ndarray, hint: str | None
 ) -> SideChoice:
-    """The side of each visible handle frame, from the near and far solutions ``near``, ``far``
-    (m, 3) world metres, their depth offset ``offset`` (m,) metres from the head's foot on the ray
-    and its standard uncertainty ``offset_sigma`` (m,) metres, and the user's ``hint``.
+    """The side of each visible handle frame, from its depth offset ``offset`` (m,) metres from the
+    head's foot on the ray (the near and far solutions ``near``, ``far`` (m, 3) are that far either
+    side), the offset's standard uncertainty ``offset_sigma`` (m,) metres, and the user's ``hint``.
 
-    Dynamic programming over the signed offsets ``s = +-offset`` minimises, in squared standard
-    deviations: the second differences of ``s`` over their noise (a stretch and its mirror are
-    equally smooth, so this term only weighs where the side changes: through a zero crossing of
-    ``s``, or a bounce off zero), ``SWITCH_EVIDENCE`` per change of side and ``HINT_COST`` per frame
-    off the hint. Each stretch between changes gets the cost of turning it over as its margin.
+    A stretch and its mirror image are equally consistent with the image, so the side changes only
+    where the offset comes within its noise of zero (a graze: a local minimum below twice its
+    uncertainty). There the frames around it (``CROSSING_WINDOW`` each side, weighted by their
+    uncertainty) are fitted by a quadratic in time twice: the signed offsets as a crossing (their
+    sign changed after the graze) and as a bounce (unchanged); the bounce's extra weighted squared
+    residual is the crossing's evidence (a crossing is a line through zero, a bounce a V with its
+    tip at zero; a tangent touch is a U, which both fit). Crossings with at least
+    ``SWITCH_EVIDENCE`` change the side; the stretches so separated alternate, the hinted side taken
+    by the ones holding most frames.
 
     Raises:
         TrackError: no hint, and the two solutions more than ``NEGLIGIBLE_OFFSET`` apart in some frame:
@@ -493,61 +512,48 @@ def choose_sides(
             f"on which side of the head the handle end is (the two sides differ by up to {2 * offset[worst]:.2f} m); "
             "say which with --handle-hint near|far (LiftSettings.handle_hint)"
         )
-    sigma = np.maximum(offset_sigma, 1e-3)
-    unary = np.zeros((m, 2))
-    if hint is not None:
-        unary[:, 0 if hint == "far" else 1] += HINT_COST
-    acceleration_sigma = np.sqrt(sigma[2:] ** 2 + 4 * sigma[1:-1] ** 2 + sigma[:-2] ** 2)
-    choice = _cheapest_sides(offset, acceleration_sigma, unary)
-    cost = _side_cost(choice, offset, acceleration_sigma, unary)
+    sigma = np.maximum(offset_sigma, 1e-4)
+    crossings, evidence = [], []
+    for t in range(1, m - 1):
+        if offset[t] <= offset[t - 1] and offset[t] < offset[t + 1] and offset[t] < 2 * sigma[t]:
+            strength = _crossing_evidence(offset, sigma, t)
+            if strength >= SWITCH_EVIDENCE:
+                crossings.append(t)
+                evidence.append(strength)
+    parity = np.zeros(m, dtype=int)
+    for t in crossings:
+        parity[t:] ^= 1
+    hinted = hint == "far"
+    # the parity whose frames are on the hinted side: the one most frames have
+    hinted_parity = int(np.sum(parity) > m / 2)
+    far_chosen = np.where(parity == hinted_parity, hinted, not hinted)
+    source = np.where(parity == hinted_parity, "hint", "crossing").astype("<U10")
     margin = np.zeros(m)
-    source = np.empty(m, dtype="<U10")
-    changes = np.flatnonzero(np.diff(choice)) + 1
-    for start, stop in zip(np.r_[0, changes], np.r_[changes, m]):
-        turned = choice.copy()
-        turned[start:stop] = 1 - turned[start:stop]
-        margin[start:stop] = _side_cost(turned, offset, acceleration_sigma, unary) - cost
+    bounds = [0, *crossings, m]
+    for k, (start, stop) in enumerate(zip(bounds[:-1], bounds[1:])):
+        if parity[start] != hinted_parity:
+            edges = [evidence[j] for j in (k - 1, k) if 0 <= j < len(evidence)]
+            margin[start:stop] = min(edges)
         if np.max(offset[start:stop]) < NEGLIGIBLE_OFFSET:
             source[start:stop] = "negligible"
-        elif hint is not None and np.all(choice[start:stop] == (hint == "far")):
-            source[start:stop] = "hint"
-        else:
-            source[start:stop] = "crossing"
-    return SideChoice(far=choice.astype(bool), source=source, margin=margin)
+    return SideChoice(far=far_chosen.astype(bool), source=source, margin=margin)
 
 
-def _cheapest_sides(offset: np.ndarray, acceleration_sigma: np.ndarray, unary: np.ndarray) -> np.ndarray:
-    """(m,) int, 1 far / 0 near: the choice of least :func:`_side_cost` (dynamic programming over
-    the pair of the last two choices)."""
-    m = len(offset)
-    if m < 3:
-        return np.argmin(unary, axis=1)
-    signed = np.stack([-offset, offset], axis=1)  # (m, 2)
-    switch = SWITCH_EVIDENCE * (np.arange(2)[:, None] != np.arange(2)[None, :])
-    # cost[a, b]: best cost of a path whose choices at frames t-1, t are a, b
-    cost = unary[0][:, None] + unary[1][None, :] + switch
-    back = np.zeros((m, 2, 2), dtype=int)
-    for t in range(2, m):
-        second = (
-            signed[t][None, None, :] - 2 * signed[t - 1][None, :, None] + signed[t - 2][:, None, None]
-        ) / acceleration_sigma[t - 2]
-        total = cost[:, :, None] + second**2 + switch[None, :, :] + unary[t][None, None, :]
-        back[t] = np.argmin(total, axis=0)
-        cost = np.min(total, axis=0)
-    last = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    choice = np.zeros(m, dtype=int)
-    choice[-2], choice[-1] = last
-    for t in range(m - 1, 1, -1):
-        choice[t - 2] = back[t, choice[t - 1], choice[t]]
-    return choice
-
-
-def _side_cost(choice: np.ndarray, offset: np.ndarray, acceleration_sigma: np.ndarray, unary: np.ndarray) -> float:
-    """The cost :func:`choose_sides` minimises for ``choice`` (m,) int (1 far)."""
-    signed = np.where(choice == 1, offset, -offset)
-    smooth = np.sum((np.diff(signed, n=2) / acceleration_sigma) ** 2) if len(signed) > 2 else 0.0
-    changes = np.count_nonzero(np.diff(choice))
-    return float(smooth + SWITCH_EVIDENCE * changes + np.sum(unary[np.arange(len(choice)), choice]))
+def _crossing_evidence(offset: np.ndarray, sigma: np.ndarray, graze: int) -> float:
+    """How much worse (weighted squared residual, squared standard deviations) a quadratic in time
+    fits the offsets (m,) metres around frame ``graze`` as a bounce than as a crossing
+    (:func:`choose_sides`); ``sigma`` (m,) metres weighs each frame."""
+    frames = np.arange(max(0, graze - CROSSING_WINDOW), min(len(offset), graze + CROSSING_WINDOW + 1))
+    if len(frames) < 5:
+        return 0.0
+    times = (frames - graze).astype(float)
+    design = np.column_stack([np.ones_like(times), times, times**2]) / sigma[frames, None]
+    residuals = []
+    for signs in (np.where(frames > graze, -1.0, 1.0), np.ones(len(frames))):
+        target = signs * offset[frames] / sigma[frames]
+        solution, *_ = np.linalg.lstsq(design, target, rcond=None)
+        residuals.append(float(np.sum((design @ solution - target) ** 2)))
+    return residuals[1] - residuals[0]
 
 
 def _head_moves(
