@@ -231,7 +231,9 @@ def lift(raw: EndpointTracks, camera: Camera, truth: ToolDemo, settings: LiftSet
     pixels = (raw if variant.handle_pixels == "raw" else tracks).handle[frames]
     rays = camera.rays(pixels)
     near, far, offset = lift_module.handle_candidates(origin, rays, head[frames], length)
-    far_chosen, _ = lift_module._handle_sides(near, far, offset, settings)
+    # issue 50: the sides follow the hint, moved only at a clear zero crossing (its figures above
+    # were measured with the earlier smoothness choice, which agreed with the hint on this camera)
+    far_chosen = lift_module.choose_sides(near, far, offset, np.full(len(offset), 0.01), settings.handle_hint).far
     signed = np.where(far_chosen, offset, -offset)
     foot, squared = lift_module.squared_offset(origin, rays, head[frames], length)
     # the noise left on the pixels by the fixed filter (the offset's variants keep it)
