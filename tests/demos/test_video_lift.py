@@ -326,6 +326,23 @@ def test_the_lift_reports_each_ends_pixel_filter():
     assert lift_tracks(tracks, CAMERA, "spade", 24.0, fixed).pixel_smoothing == (1.5, 1.5)
 
 
+def test_the_lift_command_prints_the_sides_and_the_mirror(tmp_path, capsys):
+    from toolimit.cli import main
+
+    demo = planar_demo(0.5)
+    write_tracks(perturbed(project_demo(demo, CAMERA), 1.0, 0.1, seed=4), tmp_path / "t.csv")
+    write_camera(CAMERA, tmp_path / "c.json")
+    out = tmp_path / "lifted.npz"
+    argv = ["demo", "lift", str(tmp_path / "t.csv"), "--camera", str(tmp_path / "c.json"), "--tool", "spade"]
+    assert main([*argv, "--fps", "24", "--handle-hint", "near", "--plane-normal", "1,0", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "handle sides: 40 frames from the hint, 0 left it; a frame on the wrong side would put" in printed
+    assert "if its side is right" in printed
+    record = read_lifted(out)
+    assert record.arrays["side_source"].tolist() == ["hint"] * demo.n_frames
+    np.testing.assert_allclose(record.demo.head, demo.head, atol=0.03)
+
+
 # --- refusals --------------------------------------------------------------------------------------
 def test_too_few_visible_frames():
     tracks = project_demo(planar_demo(0.5), CAMERA)

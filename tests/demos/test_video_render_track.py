@@ -107,6 +107,8 @@ def _written_tracks(tmp_path, mutate) -> tuple[str, str]:
         (lambda t: t, ["--handle-hint", "sideways"], "--handle-hint"),
         (lambda t: t, ["--plane-point", "1,2"], "--plane-point"),
         (lambda t: t, ["--smoothing", "-1"], "--smoothing"),
+        (lambda t: t, ["--plane-normal", "1"], "--plane-normal"),
+        (lambda t: t, ["--handle-hint", "near", "--plane-normal", "1,0"], "from edge-on"),
     ],
 )
 def test_lift_refuses_in_one_line_and_writes_nothing(tmp_path, capsys, mutate, extra, fragment):
