@@ -84,9 +84,9 @@ class LiftSettings:
         plane_point: a world point (x, y, z metres) on the head's working plane (None: the plane
             from the frames where the head touches the ground).
         plane_normal: the working plane's horizontal normal (x, y, world; its length and sign do
-            not matter), the user's knowledge of the motion's direction, e.g. a calibration board
-            laid along it (None: the camera's viewing direction made horizontal, a camera facing
-            the motion).
+            not matter): how the motion is turned, which one view cannot tell and the user knows,
+            say from a calibration board laid along the motion (None: the camera's viewing
+            direction made horizontal, a camera facing the motion).
         contact_share: share of the head's frames taken as its ground contacts (the nearest
             ray-ground meetings).
         pixel_noise: standard deviation of the tracks' pixel error, for the per-frame uncertainty.
