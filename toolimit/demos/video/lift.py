@@ -4,11 +4,14 @@ One view cannot give depth, so the lift uses what the scene tells (measured: a f
 reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 m off):
 
 1. **The working plane.** The head moves in a vertical plane facing the camera (its normal is the
-   camera's viewing direction made horizontal). Its distance comes from the frames where the head
+   camera's viewing direction made horizontal), or turned as the user says (``plane_normal``: one
+   view cannot tell how the motion is turned). Its distance comes from the frames where the head
    touches the ground: a head ray that points below the horizon meets the ground z = 0 at a
    horizontal distance ``d``; a head on or above the ground lies no farther than that, so the
    plane is as far as the nearest such meetings (the mean of the lowest ``contact_share`` of them).
-   Or it is given: a known point of the plane (the hammer's nail).
+   Or it is given: a known point of the plane (the hammer's nail). Where no tool of the given
+   length joins the lifted head to the handle's rays in many frames, the plane is wrong and the
+   lift refuses.
 2. **The head** is its ray's intersection with that plane (closed form).
 3. **The handle end** lies on its own ray at the tool's length from the head: two solutions, the
    near one (nearer to the camera than the foot of the head on that ray) and the far one, at a signed
@@ -16,11 +19,12 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    is as plausible as the motion, so the side is the user's knowledge (``handle_hint``), and a frame
    leaves the hinted side only on evidence from the image (:func:`choose_sides`): the depth offset
    crosses zero (the tool turns through the plane square to the handle's ray) and the frames around
-   fit a crossing better than a bounce by ``SWITCH_EVIDENCE`` squared standard deviations. Nothing in one view tells the side of a whole stretch (the smoothness of the 3D
-   path, used before, chose the mirror image confidently on other cameras, and the real
-   recordings' handle ends go 14 cm under the ground, so the ground does not tell it either):
-   without a hint the lift refuses rather than return a mirrored demonstration, unless the two
-   solutions are negligibly apart. Each frame records its side's source and margin.
+   fit a crossing better than a bounce by ``SWITCH_EVIDENCE`` squared standard deviations. Nothing
+   in one view tells the side of a whole stretch: the smoother of a 3D path and its mirror image
+   can be the mirror image, and a handle end under the ground rules nothing out (the authors'
+   recordings put it 14 cm under). Without a hint the lift refuses rather than return a mirrored
+   demonstration, unless the two solutions are negligibly apart. Each frame records where its side
+   came from, the evidence, and how far the mirror solution is.
 4. **The handle's depth** along its ray is smoothed over time: its signed offset from the foot
    (+ far, - near) is filtered by a Gaussian in time. Where the ray grazes the sphere of the tool's length
    (a tool seen nearly side-on), the offset is the square root of a small noisy number: pixel noise
@@ -57,8 +61,8 @@ SWITCH_EVIDENCE = 25.0
 #: Frames each side of a graze fitted to tell a crossing from a bounce.
 CROSSING_WINDOW = 6
 #: The least standard uncertainty (metres) of a depth offset in the crossing test, whatever the
-#: pixel noise: the head leaving its plane moves the lifted offsets by centimetres (exact tracks of
-#: the benchmark's synthetic hammer otherwise showed a tangent touch as a 5-sigma crossing).
+#: pixel noise: the head leaving its plane moves the lifted offsets by centimetres, enough to make a
+#: tangent touch on exact tracks look like a crossing.
 OFFSET_SIGMA_FLOOR = 0.01
 #: Separations of the two solutions below this (metres) change nothing that matters.
 NEGLIGIBLE_OFFSET = 0.005
@@ -232,7 +236,8 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
 
     Raises:
         TrackError: too few visible frames, a camera not above the ground or looking straight
-            down, a camera that sees no ground, a mirror ambiguity without a hint.
+            down, a camera that sees no ground, a plane seen nearly edge-on or that no tool of the
+            given length fits, a mirror ambiguity without a hint.
     """
     from toolimit.tools import tool_spec
 
