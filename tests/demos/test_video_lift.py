@@ -488,3 +488,12 @@ def test_spade_video_1_seen_from_the_side_is_lifted_within_10_cm(video_demos_dir
         assert "mirror ambiguity" in str(error)
     else:
         assert np.mean(unhinted.handle_far) < 0.5, "the handle end is on the near side of the head"
+
+
+def test_the_side_camera_on_the_other_side():
+    demo = planar_demo(0.5)
+    one, other = side_camera(demo.head), side_camera(demo.head, other_side=True)
+    centre = demo.head.mean(axis=0)
+    np.testing.assert_allclose(one.centre[:2] + other.centre[:2], 2 * centre[:2], atol=1e-9)
+    assert one.centre[2] == other.centre[2] == 1.2
+    assert handle_side(demo, one) != handle_side(demo, other), "the near side seen from the other side is far"
