@@ -231,8 +231,6 @@ def lift(raw: EndpointTracks, camera: Camera, truth: ToolDemo, settings: LiftSet
     pixels = (raw if variant.handle_pixels == "raw" else tracks).handle[frames]
     rays = camera.rays(pixels)
     near, far, offset = lift_module.handle_candidates(origin, rays, head[frames], length)
-    far_chosen, _ = lift_module._handle_sides(near, far, offset, settings)
-    signed = np.where(far_chosen, offset, -offset)
     foot, squared = lift_module.squared_offset(origin, rays, head[frames], length)
     # the noise left on the pixels by the fixed filter (the offset's variants keep it)
     kept = lift_module._pixel_steps(settings.pixel_noise, variant.widths[0])[0][0]
@@ -256,6 +254,12 @@ def lift(raw: EndpointTracks, camera: Camera, truth: ToolDemo, settings: LiftSet
             ) ** 2
         return squared, np.sqrt(spread)
 
+    # issue 50: the sides follow the hint, moved only at a clear zero crossing, judged with the
+    # offset's spread as the lift computes it (the committed variants.json predates this choice)
+    positive, spread = np.maximum(squared, 0.0), squared_spread(pixels, noise)[1]
+    offset_sigma = (np.sqrt(positive + spread) - np.sqrt(np.maximum(positive - spread, 0.0))) / 2
+    far_chosen = lift_module.choose_sides(near, far, offset, offset_sigma, settings.handle_hint).far
+    signed = np.where(far_chosen, offset, -offset)
     if variant.offset == "fixed" and variant.widths[1] > 0:
         signed = lift_module._filtered(signed[:, None], frames, tracks.n_frames, variant.widths[1])[frames, 0]
     elif variant.offset == "gcv":

@@ -34,7 +34,9 @@ def test_a_clean_demo_comes_out_nearly_unchanged(tool):
         clean = synthesize_motion(tool, seed).clean
         cleaned, report = clean_demo(clean)
         assert report.n_replaced == 0
-        change = np.maximum(np.linalg.norm(cleaned.head - clean.head, axis=1), np.linalg.norm(cleaned.handle - clean.handle, axis=1))
+        change = np.maximum(
+            np.linalg.norm(cleaned.head - clean.head, axis=1), np.linalg.norm(cleaned.handle - clean.handle, axis=1)
+        )
         assert change.max() < 0.009 and _rms(cleaned, clean) < 0.003
 
 

@@ -34,13 +34,21 @@ def test_regeneration_matches_the_shipped_files(repo_root, disabled):
         env["NPY_DISABLE_CPU_FEATURES"] = disabled
     run = subprocess.run(
         [sys.executable, str(repo_root / "scripts" / "make_demos.py"), "--check"],
-        check=False, env=env, capture_output=True, text=True, timeout=300,
+        check=False,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert run.returncode == 0, run.stderr
     assert "all 15 files" in run.stdout
     features = subprocess.run(
         [sys.executable, "-c", "import numpy; print(numpy._core._multiarray_umath.__cpu_features__['AVX512_SKX'])"],
-        check=False, env=env, capture_output=True, text=True, timeout=60,
+        check=False,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     if disabled is not None:
         assert features.stdout.strip() == "False", "NPY_DISABLE_CPU_FEATURES did not reach numpy"

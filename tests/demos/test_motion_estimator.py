@@ -41,7 +41,9 @@ def _pickle(path, head, handle, joints, protocol: int = 2, **override) -> None:
     offset = np.array([0.3, 1.1, 3.5])  # the person stands 3.5 m in front of the camera
     data = {
         "fps": 24,
-        "keypoint_3d_positions_object": np.matrix(np.vstack([_to_camera(handle, offset).T, _to_camera(head, offset).T])),
+        "keypoint_3d_positions_object": np.matrix(
+            np.vstack([_to_camera(handle, offset).T, _to_camera(head, offset).T])
+        ),
         "joint_3d_positions_person": np.matrix(_to_camera(joints, offset).reshape(N, 72).T),
         "config_object": np.matrix(np.zeros((N, 7))),
     }
@@ -112,11 +114,23 @@ def test_pickle_with_code_is_refused(tmp_path):
         ({"fps": None}, "missing key 'fps'"),
         ({"keypoint_3d_positions_object": None}, "missing key 'keypoint_3d_positions_object'"),
         ({"fps": -3}, "key 'fps' must be a positive number"),
-        ({"keypoint_3d_positions_object": np.zeros((5, N))}, r"'keypoint_3d_positions_object' must have shape \(6, nf\), got \(5, 40\)"),
+        (
+            {"keypoint_3d_positions_object": np.zeros((5, N))},
+            r"'keypoint_3d_positions_object' must have shape \(6, nf\), got \(5, 40\)",
+        ),
         ({"joint_3d_positions_person": np.zeros((72, N + 1))}, "has 40 frames but 'joint_3d_positions_person' has 41"),
-        ({"keypoint_3d_positions_object": np.full((6, N), np.nan)}, "'keypoint_3d_positions_object' has NaN or inf at frames"),
+        (
+            {"keypoint_3d_positions_object": np.full((6, N), np.nan)},
+            "'keypoint_3d_positions_object' has NaN or inf at frames",
+        ),
         ({"keypoint_3d_positions_object": np.zeros((6, N))}, "head and handle end coincide at frame 0"),
-        ({"keypoint_3d_positions_object": np.tile([[0.0], [0], [0], [0], [0], [1]], 5), "joint_3d_positions_person": np.zeros((72, 5))}, "too few frames: 5"),
+        (
+            {
+                "keypoint_3d_positions_object": np.tile([[0.0], [0], [0], [0], [0], [1]], 5),
+                "joint_3d_positions_person": np.zeros((72, 5)),
+            },
+            "too few frames: 5",
+        ),
     ],
 )
 def test_malformed_pickles(tmp_path, override, message):

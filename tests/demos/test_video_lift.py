@@ -4,11 +4,12 @@ and the real trajectories seen by the benchmark's side camera (skipped without .
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from toolimit.demos import ToolDemo, load_video_trajectory
+from toolimit.demos import ToolDemo, load_video_trajectory, save_demo
 from toolimit.demos.video import (
     TRACKS_HEADER,
     EndpointTracks,
@@ -20,13 +21,22 @@ from toolimit.demos.video import (
     project_demo,
     ray_plane_intersection,
     read_camera,
+    read_lifted,
     read_tracks,
     side_camera,
     write_camera,
+    write_lifted,
     write_tracks,
 )
-from toolimit.demos.video.lift import PIXEL_WIDTHS, _filter_diagonal, _filtered, cross_validated_width
-from toolimit.errors import InvalidSetting, TrackError
+from toolimit.demos.video.lift import (
+    PIXEL_WIDTHS,
+    SWITCH_EVIDENCE,
+    _filter_diagonal,
+    _filtered,
+    choose_sides,
+    cross_validated_width,
+)
+from toolimit.errors import DemoError, InvalidSetting, TrackError
 
 EXACT = LiftSettings(smoothing=0.0, offset_smoothing=0.0)
 #: A camera 1.2 m high at the origin, looking along +x at the working plane x = 3.
@@ -114,18 +124,107 @@ def test_a_known_plane_point_replaces_the_ground():
     settings = LiftSettings(handle_hint="near", smoothing=0.0, offset_smoothing=0.0, plane_point=(3.0, 5.0, -1.0))
     lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, settings)
     np.testing.assert_allclose(lifted.demo.head, demo.head, atol=1e-9)
-    from_ground = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint="near"))
-    assert from_ground.plane_distance > 3.1, "without the point, the lowest head is taken for a ground contact"
+    # without the point, the lowest head is taken for a ground contact: the plane comes too far, where
+    # no tool of its length joins the head to its handle's rays, and the lift says so
+    with pytest.raises(TrackError, match="the working plane does not fit: in 40 of 40 frames"):
+        lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, LiftSettings(handle_hint="near"))
 
 
-def test_smoothness_alone_decides_when_the_mirror_image_is_rougher():
+def test_the_hint_holds_where_smoothness_would_overrule_it():
+    # The true motion leans towards the camera (near), and its mirror image's handle path is rougher
+    # by more than the 1.5 times the lift used to call unambiguous: smoothness would choose near.
+    # Told "far", the lift keeps far in every frame: nothing in the image contradicts it.
     demo = planar_demo(0.5)
-    lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, EXACT)
-    assert not lifted.hint_used
-    np.testing.assert_allclose(lifted.demo.handle, demo.handle, atol=1e-9)
     near, far = _candidates(demo)
-    mirrored = np.where(lifted.handle_far[:, None], near, far)
-    assert np.sum(np.diff(mirrored, n=2, axis=0) ** 2) > 1.5 * np.sum(np.diff(demo.handle, n=2, axis=0) ** 2)
+    roughness = [float(np.sum(np.diff(path, n=2, axis=0) ** 2)) for path in (near, far)]
+    assert roughness[1] > 1.5 * roughness[0]
+    lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, replace(EXACT, handle_hint="far"))
+    assert lifted.handle_far.all() and lifted.hint_used
+    assert set(lifted.side_source.tolist()) == {"hint"}
+    np.testing.assert_allclose(lifted.demo.handle, far, atol=1e-9)
+    right = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, replace(EXACT, handle_hint="near"))
+    np.testing.assert_allclose(right.demo.handle, demo.handle, atol=1e-9)
+
+
+def test_the_per_frame_side_record():
+    demo = planar_demo(0.5)
+    tracks = perturbed(project_demo(demo, CAMERA), 1.0, 0.1, seed=2)
+    lifted = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near"))
+    assert lifted.side_source.shape == lifted.side_margin.shape == lifted.mirror_distance.shape == (demo.n_frames,)
+    # only the hint holds each frame: no evidence from the image
+    assert set(lifted.side_source.tolist()) == {"hint"} and not lifted.side_margin.any()
+    # the mirror solution is twice the depth offset away: the error of a wrong side
+    near, far = _candidates(demo)
+    true_separation = np.linalg.norm(far - near, axis=1)
+    assert np.median(np.abs(lifted.mirror_distance - true_separation)) < 0.03
+    assert np.median(lifted.mirror_distance) > 10 * np.median(lifted.handle_sigma)
+
+
+def turning_through_the_ray(frames: int = 48) -> ToolDemo:
+    """A head sliding along the plane x = 3 on the ground, its 0.4 m tool turning from 0.7 rad
+    towards the camera to 0.7 rad away from it: the handle end crosses from near to far."""
+    t = np.linspace(0.0, 1.0, frames)
+    head = np.column_stack([np.full(frames, 3.0), -0.3 + 0.6 * t, np.zeros(frames)])
+    tilt = 0.7 - 1.4 * t
+    axis = np.column_stack([-np.sin(tilt), np.zeros(frames), np.cos(tilt)])
+    return ToolDemo(head, head + 0.4 * axis, 24.0, "spade")
+
+
+@pytest.mark.parametrize("hint", ["near", "far"])
+def test_a_frame_leaves_the_hint_only_at_a_clear_zero_crossing(hint):
+    # depth offsets (m) of a handle end crossing the head's foot at frame 12 (a V) at 5 cm a frame, to 1 cm
+    frames = np.arange(30)
+    offset = np.abs(0.05 * (frames - 12.0))
+    points = np.zeros((30, 3))
+    sides = choose_sides(points, points, offset, np.full(30, 0.01), hint)
+    # most frames (13-29) keep the hint; frames 0-11 are across a crossing of evidence >= 5 sigma
+    assert np.all(sides.far[13:] == (hint == "far")) and np.all(sides.far[:12] != (hint == "far"))
+    assert set(sides.source[:12].tolist()) == {"crossing"} and set(sides.source[13:].tolist()) == {"hint"}
+    assert np.all(sides.margin[:12] >= SWITCH_EVIDENCE) and not sides.margin[13:].any()
+    # the same within its noise of 10 cm: no evidence, the hint holds every frame
+    noisy = choose_sides(points, points, offset, np.full(30, 0.1), hint)
+    assert np.all(noisy.far == (hint == "far")) and set(noisy.source.tolist()) == {"hint"}
+    # a tangent touch (a U) is no crossing
+    touch = choose_sides(points, points, 0.005 * (frames - 12.0) ** 2, np.full(30, 0.01), hint)
+    assert np.all(touch.far == (hint == "far"))
+
+
+def test_without_a_hint_a_mirror_ambiguity_is_refused():
+    for demo in (planar_demo(0.5), turning_through_the_ray()):
+        with pytest.raises(TrackError, match="mirror ambiguity.*--handle-hint near|far"):
+            lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, EXACT)
+
+
+def test_a_given_plane_normal_turns_the_working_plane():
+    # the head moves in the vertical plane through (3, 0) turned 40 deg from facing the camera
+    frames = 40
+    t = np.linspace(0.0, 1.0, frames)
+    along = np.array([np.sin(np.radians(40)), np.cos(np.radians(40)), 0.0])
+    head = np.array([3.0, 0.0, 0.0]) + (-0.5 + t)[:, None] * along
+    head[:, 2] = 0.3 * np.clip(np.sin(2 * np.pi * t), 0.0, None)
+    demo = ToolDemo(head, head + [0.0, 0.0, 0.4], 24.0, "spade")
+    normal = (float(np.cos(np.radians(40))), float(-np.sin(np.radians(40))))
+    settings = replace(EXACT, handle_hint="near", plane_point=(3.0, 0.0, 0.0))
+    turned = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, replace(settings, plane_normal=normal))
+    np.testing.assert_allclose(turned.demo.head, demo.head, atol=1e-9)
+    facing = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, settings)
+    assert np.max(np.linalg.norm(facing.demo.head - demo.head, axis=1)) > 0.2
+    with pytest.raises(TrackError, match="from edge-on"):
+        lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, replace(settings, plane_normal=(0.0, 1.0)))
+
+
+def test_the_lifted_file_round_trips_and_names_a_foreign_file(tmp_path):
+    demo = planar_demo(0.5)
+    lifted = lift_tracks(project_demo(demo, CAMERA), CAMERA, "spade", 24.0, replace(EXACT, handle_hint="near"))
+    write_lifted(lifted, lifted.demo, tmp_path / "lifted.npz")
+    record = read_lifted(tmp_path / "lifted.npz")
+    np.testing.assert_allclose(record.demo.handle, demo.handle, atol=1e-9)
+    assert record.arrays["side_source"].tolist() == lifted.side_source.tolist()
+    np.testing.assert_allclose(record.arrays["side_margin"], lifted.side_margin)
+    assert record.side_summary().startswith(f"handle sides: {demo.n_frames} frames from the hint, 0 left it")
+    save_demo(demo, tmp_path / "plain.npz")
+    with pytest.raises(DemoError, match="missing key 'head_sigma': not a file written by `toolimit demo lift`"):
+        read_lifted(tmp_path / "plain.npz")
 
 
 def _candidates(demo: ToolDemo) -> tuple[np.ndarray, np.ndarray]:
@@ -223,7 +322,25 @@ def test_the_lift_reports_each_ends_pixel_filter():
     tracks = perturbed(project_demo(planar_demo(0.5), CAMERA), 2.0, 0.0, seed=1)
     chosen = lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(handle_hint="near")).pixel_smoothing
     assert all(width in PIXEL_WIDTHS for width in chosen)
-    assert lift_tracks(tracks, CAMERA, "spade", 24.0, LiftSettings(smoothing=1.5)).pixel_smoothing == (1.5, 1.5)
+    fixed = LiftSettings(handle_hint="near", smoothing=1.5)
+    assert lift_tracks(tracks, CAMERA, "spade", 24.0, fixed).pixel_smoothing == (1.5, 1.5)
+
+
+def test_the_lift_command_prints_the_sides_and_the_mirror(tmp_path, capsys):
+    from toolimit.cli import main
+
+    demo = planar_demo(0.5)
+    write_tracks(perturbed(project_demo(demo, CAMERA), 1.0, 0.1, seed=4), tmp_path / "t.csv")
+    write_camera(CAMERA, tmp_path / "c.json")
+    out = tmp_path / "lifted.npz"
+    argv = ["demo", "lift", str(tmp_path / "t.csv"), "--camera", str(tmp_path / "c.json"), "--tool", "spade"]
+    assert main([*argv, "--fps", "24", "--handle-hint", "near", "--plane-normal", "1,0", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "handle sides: 40 frames from the hint, 0 left it; a frame on the wrong side would put" in printed
+    assert "if its side is right" in printed
+    record = read_lifted(out)
+    assert record.arrays["side_source"].tolist() == ["hint"] * demo.n_frames
+    assert np.mean(np.linalg.norm(record.demo.head - demo.head, axis=1)) < 0.02
 
 
 # --- refusals --------------------------------------------------------------------------------------
@@ -371,3 +488,12 @@ def test_spade_video_1_seen_from_the_side_is_lifted_within_10_cm(video_demos_dir
         assert "mirror ambiguity" in str(error)
     else:
         assert np.mean(unhinted.handle_far) < 0.5, "the handle end is on the near side of the head"
+
+
+def test_the_side_camera_on_the_other_side():
+    demo = planar_demo(0.5)
+    one, other = side_camera(demo.head), side_camera(demo.head, other_side=True)
+    centre = demo.head.mean(axis=0)
+    np.testing.assert_allclose(one.centre[:2] + other.centre[:2], 2 * centre[:2], atol=1e-9)
+    assert one.centre[2] == other.centre[2] == 1.2
+    assert handle_side(demo, one) != handle_side(demo, other), "the near side seen from the other side is far"

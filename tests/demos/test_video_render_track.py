@@ -8,7 +8,7 @@ import pytest
 
 from toolimit.cli import main
 from toolimit.demos import load_demo, save_demo, synthesize_demo
-from toolimit.demos.video import look_at, read_camera, read_tracks, side_camera, write_camera, write_tracks
+from toolimit.demos.video import look_at, read_camera, read_lifted, read_tracks, side_camera, write_camera, write_tracks
 
 cv2 = pytest.importorskip("cv2", reason="OpenCV is the [video] extra: pip install -e '.[test,compare,video]'")
 
@@ -63,12 +63,14 @@ def test_render_track_lift_commands(tmp_path, capsys, rendered):
     argv = ["demo", "lift", str(tracks_path), "--camera", str(camera_path), "--tool", "spade", "--fps", "24"]
     assert main([*argv, "--handle-hint", "far", "--out", str(lifted_path)]) == 0
     printed = capsys.readouterr().out
-    assert "working plane" in printed and "handle sides from" in printed
+    assert "working plane" in printed and "handle sides: " in printed and "if its side is right" in printed
     lifted = load_demo(lifted_path)
     assert lifted.n_frames == demo.n_frames and lifted.tool == "spade"
     assert np.mean(np.linalg.norm(lifted.head - demo.head, axis=1)) < 0.15
-    with np.load(lifted_path) as stored:
-        assert stored["head_sigma"].shape == (demo.n_frames,)
+    record = read_lifted(lifted_path)
+    assert record.arrays["head_sigma"].shape == record.arrays["side_margin"].shape == (demo.n_frames,)
+    assert set(record.arrays["side_source"].tolist()) <= {"hint", "crossing", "negligible"}
+    assert record.side_summary() in printed, "the printed summary is the file's"
 
 
 def test_render_without_a_camera_writes_the_side_camera(tmp_path, capsys):
@@ -105,6 +107,8 @@ def _written_tracks(tmp_path, mutate) -> tuple[str, str]:
         (lambda t: t, ["--handle-hint", "sideways"], "--handle-hint"),
         (lambda t: t, ["--plane-point", "1,2"], "--plane-point"),
         (lambda t: t, ["--smoothing", "-1"], "--smoothing"),
+        (lambda t: t, ["--plane-normal", "1"], "--plane-normal"),
+        (lambda t: t, ["--handle-hint", "near", "--plane-normal", "1,0"], "from edge-on"),
     ],
 )
 def test_lift_refuses_in_one_line_and_writes_nothing(tmp_path, capsys, mutate, extra, fragment):

@@ -90,11 +90,27 @@ def _point(text: str) -> tuple[float, float, float]:
     return values  # type: ignore[return-value]
 
 
+def _direction(text: str) -> tuple[float, float]:
+    """``x,y`` -> a horizontal direction (argparse type)."""
+    try:
+        values = tuple(float(value) for value in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected x,y, got {text!r}") from None
+    if len(values) != 2:
+        raise argparse.ArgumentTypeError(f"expected two coordinates x,y, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
 #: ``toolimit demo lift``'s flags: the fields of :class:`LiftSettings` a user sets.
 LIFT_FLAGS = (
     Flag("handle_hint", choices=HANDLE_HINTS),
     Flag("tool_length"),
     Flag("plane_point", parse=_point, show=lambda point: "from the ground contacts" if point is None else str(point)),
+    Flag(
+        "plane_normal",
+        parse=_direction,
+        show=lambda normal: "the camera's viewing direction" if normal is None else str(normal),
+    ),
     Flag("contact_share"),
     Flag("pixel_noise"),
     Flag("smoothing", show=lambda width: "chosen for each end by cross-validation" if width is None else str(width)),
@@ -178,8 +194,8 @@ def run_track(args: argparse.Namespace) -> int:
 
 
 def run_lift(args: argparse.Namespace) -> int:
-    from toolimit.demos import save_demo
     from toolimit.demos.video import lift_tracks, read_camera, read_tracks
+    from toolimit.demos.video.lifted_file import side_summary, write_lifted
 
     check_choice("--tool", args.tool, _tools(), "tool")
     if not args.fps > 0:
@@ -193,25 +209,16 @@ def run_lift(args: argparse.Namespace) -> int:
     camera = read_camera(args.camera)
     lifted = lift_tracks(tracks, camera, args.tool, args.fps, settings)
     demo = replace(lifted.demo, source=f"lifted from {args.tracks} seen by {args.camera}")
-    save_demo(
-        demo,
-        args.out,
-        head_sigma=lifted.head_sigma,
-        handle_sigma=lifted.handle_sigma,
-        head_filled=lifted.head_filled,
-        handle_filled=lifted.handle_filled,
-        handle_far=lifted.handle_far,
-    )
-    side = (
-        f"handle sides from --handle-hint {settings.handle_hint}"
-        if lifted.hint_used
-        else "handle sides from smoothness"
-    )
+    write_lifted(lifted, demo, args.out)
     print(
-        f"wrote {args.out}: {summary(demo)}; working plane {lifted.plane_distance:.2f} m from the camera, {side}; "
-        f"uncertainty (1 sigma) head {np.median(lifted.head_sigma) * 100:.1f} cm, handle end "
-        f"{np.median(lifted.handle_sigma) * 100:.1f} cm (median over frames); "
+        f"wrote {args.out}: {summary(demo)}; working plane {lifted.plane_distance:.2f} m from the camera; "
         f"filled in: head {int(lifted.head_filled.sum())}, handle end {int(lifted.handle_filled.sum())} frames"
+    )
+    print(side_summary(lifted.side_source, lifted.side_margin, lifted.mirror_distance))
+    print(
+        f"uncertainty (1 sigma, median over frames): head {np.median(lifted.head_sigma) * 100:.1f} cm, handle end "
+        f"{np.median(lifted.handle_sigma) * 100:.1f} cm if its side is right, "
+        f"{np.median(lifted.mirror_distance) * 100:.0f} cm if not; the motion leaving its plane is not included"
     )
     return 0
 

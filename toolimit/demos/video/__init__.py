@@ -8,6 +8,7 @@ the only modules of the package that import it.
 
 from toolimit.demos.video.camera import Camera, look_at, read_camera, side_camera, write_camera
 from toolimit.demos.video.lift import LiftedDemo, LiftSettings, handle_side, lift_tracks, ray_plane_intersection
+from toolimit.demos.video.lifted_file import LiftedRecord, read_lifted, write_lifted
 from toolimit.demos.video.tracks import (
     TRACKS_HEADER,
     EndpointTracks,
@@ -23,6 +24,7 @@ __all__ = [
     "EndpointTracks",
     "LiftSettings",
     "LiftedDemo",
+    "LiftedRecord",
     "handle_side",
     "lift_tracks",
     "look_at",
@@ -30,8 +32,10 @@ __all__ = [
     "project_demo",
     "ray_plane_intersection",
     "read_camera",
+    "read_lifted",
     "read_tracks",
     "side_camera",
     "write_camera",
+    "write_lifted",
     "write_tracks",
 ]

@@ -142,18 +142,20 @@ def side_camera(
     width: int = DEFAULT_WIDTH,
     image_height: int = DEFAULT_HEIGHT,
     focal: float = DEFAULT_FOCAL,
+    other_side: bool = False,
 ) -> Camera:
     """A camera beside a motion: ``height`` metres above the ground, ``distance`` metres from the
     centre of ``points`` (N, 3) (the tool's path, world metres) across the motion's main horizontal
     direction, looking at that centre. Of the two sides, the one towards -y of the main direction
-    turned left (a fixed rule, so that the same points give the same camera)."""
+    turned left (a fixed rule, so that the same points give the same camera), or with
+    ``other_side`` the opposite one."""
     points = np.asarray(points, dtype=float)
     centre = points.mean(axis=0)
     horizontal = points[:, :2] - centre[:2]
     _, _, vt = np.linalg.svd(horizontal, full_matrices=False)
     main = vt[0] if vt[0][0] >= 0 else -vt[0]
     across = np.array([-main[1], main[0]])  # the main direction turned left
-    position = np.array([*(centre[:2] - distance * across), height])
+    position = np.array([*(centre[:2] + (1 if other_side else -1) * distance * across), height])
     return look_at(position, centre, width, image_height, focal)
 
 

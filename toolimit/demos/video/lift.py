@@ -4,18 +4,27 @@ One view cannot give depth, so the lift uses what the scene tells (measured: a f
 reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 m off):
 
 1. **The working plane.** The head moves in a vertical plane facing the camera (its normal is the
-   camera's viewing direction made horizontal). Its distance comes from the frames where the head
+   camera's viewing direction made horizontal), or turned as the user says (``plane_normal``: one
+   view cannot tell how the motion is turned). Its distance comes from the frames where the head
    touches the ground: a head ray that points below the horizon meets the ground z = 0 at a
    horizontal distance ``d``; a head on or above the ground lies no farther than that, so the
    plane is as far as the nearest such meetings (the mean of the lowest ``contact_share`` of them).
-   Or it is given: a known point of the plane (the hammer's nail).
+   Or it is given: a known point of the plane (the hammer's nail). Where no tool of the given
+   length joins the lifted head to the handle's rays in many frames, the plane is wrong and the
+   lift refuses.
 2. **The head** is its ray's intersection with that plane (closed form).
 3. **The handle end** lies on its own ray at the tool's length from the head: two solutions, the
-   near one (nearer to the camera than the foot of the head on that ray) and the far one. Dynamic
-   programming picks one per frame so that the handle's path is smoothest (least squared
-   acceleration); where both paths are equally smooth (the mirror image of a motion seen from the
-   side is as smooth as the motion), ``handle_hint`` decides, and without a hint the lift refuses
-   rather than return a mirrored demonstration.
+   near one (nearer to the camera than the foot of the head on that ray) and the far one, at a signed
+   depth offset ``s = -o`` or ``+o`` from that foot. The mirror image of a motion seen from one view
+   is as plausible as the motion, so the side is the user's knowledge (``handle_hint``), and a frame
+   leaves the hinted side only on evidence from the image (:func:`choose_sides`): the depth offset
+   crosses zero (the tool turns through the plane square to the handle's ray) and the frames around
+   fit a crossing better than a bounce by ``SWITCH_EVIDENCE`` squared standard deviations. Nothing
+   in one view tells the side of a whole stretch: the smoother of a 3D path and its mirror image
+   can be the mirror image, and a handle end under the ground rules nothing out (the authors'
+   recordings put it 14 cm under). Without a hint the lift refuses rather than return a mirrored
+   demonstration, unless the two solutions are negligibly apart. Each frame records where its side
+   came from, the evidence, and how far the mirror solution is.
 4. **The handle's depth** along its ray is smoothed over time: its signed offset from the foot
    (+ far, - near) is filtered by a Gaussian in time. Where the ray grazes the sphere of the tool's length
    (a tool seen nearly side-on), the offset is the square root of a small noisy number: pixel noise
@@ -46,11 +55,22 @@ from toolimit.errors import InvalidSetting, TrackError
 
 #: ``handle_hint`` values: the handle end nearer to / farther from the camera than the head.
 HANDLE_HINTS = ("near", "far")
-#: With a hint, each frame whose handle end leaves the hinted side costs this times the squared
-#: separation of the two solutions (m^2, the unit of the squared accelerations): a run of frames
-#: leaves the hint only where the smooth path clearly crosses to the other side. Measured on the
-#: benchmark's synthetic hammer (3 px): 1e-3 (a tie-breaker) gave 10.8 deg of axis error, 1 gave 5.7.
-HINT_WEIGHT = 1.0
+#: A zero crossing of the handle's depth offset moves frames off the hinted side when a bounce fits
+#: the frames around it worse than a crossing by this many squared standard deviations (5 sigma).
+SWITCH_EVIDENCE = 25.0
+#: Frames each side of a graze fitted to tell a crossing from a bounce.
+CROSSING_WINDOW = 6
+#: The least standard uncertainty (metres) of a depth offset in the crossing test, whatever the
+#: pixel noise: the head leaving its plane moves the lifted offsets by centimetres, enough to make a
+#: tangent touch on exact tracks look like a crossing.
+OFFSET_SIGMA_FLOOR = 0.01
+#: Separations of the two solutions below this (metres) change nothing that matters.
+NEGLIGIBLE_OFFSET = 0.005
+#: A handle ray passing farther than the tool's length plus this (metres) from the lifted head
+#: misses the tool: in more than ``MAX_MISSED_SHARE`` of the frames, the working plane is wrong.
+MISS_MARGIN, MAX_MISSED_SHARE = 0.05, 0.2
+#: Where each frame's side comes from (``LiftedDemo.side_source``).
+SIDE_SOURCES = ("hint", "crossing", "negligible")
 #: The pixel filter widths (frames, Gaussian standard deviation) cross-validation chooses from:
 #: 0.5 to 8 frames in steps of sqrt(2).
 PIXEL_WIDTHS = tuple(0.5 * 2 ** (k / 2) for k in range(9))
@@ -61,11 +81,16 @@ class LiftSettings:
     """How tracks are lifted to 3D (``toolimit demo lift``).
 
     Attributes:
-        handle_hint: where the handle end is when the image cannot tell: "near" (nearer to the
-            camera than the head) or "far"; None refuses a mirror ambiguity.
+        handle_hint: the side of the head the handle end is on, the user's knowledge: "near"
+            (nearer to the camera than the head) or "far"; each frame keeps it unless the image
+            shows otherwise. None: the image alone decides, or the lift refuses.
         tool_length: head to handle end, metres (None: the tool's registered length).
         plane_point: a world point (x, y, z metres) on the head's working plane (None: the plane
             from the frames where the head touches the ground).
+        plane_normal: the working plane's horizontal normal (x, y, world; its length and sign do
+            not matter): how the motion is turned, which one view cannot tell and the user knows,
+            say from a calibration board laid along the motion (None: the camera's viewing
+            direction made horizontal, a camera facing the motion).
         contact_share: share of the head's frames taken as its ground contacts (the nearest
             ray-ground meetings).
         pixel_noise: standard deviation of the tracks' pixel error, for the per-frame uncertainty.
@@ -76,19 +101,17 @@ class LiftSettings:
         offset_smoothing: standard deviation, in frames, of the Gaussian filter run along the
             handle end's signed depth offset after the near/far choice (0: none).
         min_visible_share: each end must be visible in at least this share of the frames.
-        mirror_ratio: the mirrored handle path counts as an equal explanation when its squared
-            acceleration is less than this many times the best path's.
     """
 
     handle_hint: str | None = None
     tool_length: float | None = None
     plane_point: tuple[float, float, float] | None = None
+    plane_normal: tuple[float, float] | None = None
     contact_share: float = 0.05
     pixel_noise: float = 3.0
     smoothing: float | None = None
     offset_smoothing: float = 1.0
     min_visible_share: float = 0.5
-    mirror_ratio: float = 1.5
 
     def __post_init__(self) -> None:
         if self.handle_hint is not None and self.handle_hint not in HANDLE_HINTS:
@@ -99,6 +122,14 @@ class LiftSettings:
             len(self.plane_point) != 3 or not all(math.isfinite(value) for value in self.plane_point)
         ):
             raise InvalidSetting("plane_point", f"expected three finite coordinates x, y, z, got {self.plane_point!r}")
+        if self.plane_normal is not None and (
+            len(self.plane_normal) != 2
+            or not all(math.isfinite(value) for value in self.plane_normal)
+            or math.hypot(*self.plane_normal) == 0
+        ):
+            raise InvalidSetting(
+                "plane_normal", f"expected two finite coordinates x, y, not both 0, got {self.plane_normal!r}"
+            )
         if not 0 < self.contact_share <= 1:
             raise InvalidSetting("contact_share", f"must be in (0, 1], got {self.contact_share!r}")
         if not (math.isfinite(self.pixel_noise) and self.pixel_noise >= 0):
@@ -113,8 +144,6 @@ class LiftSettings:
             )
         if not 0 < self.min_visible_share <= 1:
             raise InvalidSetting("min_visible_share", f"must be in (0, 1], got {self.min_visible_share!r}")
-        if not self.mirror_ratio >= 1:
-            raise InvalidSetting("mirror_ratio", f"must be at least 1, got {self.mirror_ratio!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,9 +157,17 @@ class LiftedDemo:
         head_filled, handle_filled: (T,) bool, frames where that end was not visible and was
             interpolated.
         handle_far: (T,) bool, whether the far solution was taken for the handle end.
+        side_source: (T,) str, what set each frame's side (``SIDE_SOURCES``): "hint" (the image shows
+            nothing against the hint), "crossing" (a zero crossing of the depth offset moved it off
+            the hint), "negligible"
+            (the two solutions are within ``NEGLIGIBLE_OFFSET`` all along its stretch).
+        side_margin: (T,) the image's evidence for a frame off the hinted side: the weakest zero
+            crossing's (:func:`choose_sides`), squared standard deviations; 0 where the hint holds.
+        mirror_distance: (T,) metres between the handle end and its mirror solution (twice the
+            depth offset): the error of a frame on the wrong side.
         plane_normal: (3,) horizontal unit normal of the working plane, pointing away from the camera.
         plane_distance: the plane's distance from the camera's centre along that normal, metres.
-        hint_used: whether the handle's sides came from ``handle_hint`` (a mirror ambiguity).
+        hint_used: whether any frame's side came from ``handle_hint`` alone.
         pixel_smoothing: the pixel filter's width for the head and for the handle end, frames.
     """
 
@@ -140,6 +177,9 @@ class LiftedDemo:
     head_filled: np.ndarray
     handle_filled: np.ndarray
     handle_far: np.ndarray
+    side_source: np.ndarray
+    side_margin: np.ndarray
+    mirror_distance: np.ndarray
     plane_normal: np.ndarray
     plane_distance: float
     hint_used: bool
@@ -196,7 +236,8 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
 
     Raises:
         TrackError: too few visible frames, a camera not above the ground or looking straight
-            down, a camera that sees no ground, a mirror ambiguity without a hint.
+            down, a camera that sees no ground, a plane seen nearly edge-on or that no tool of the
+            given length fits, a mirror ambiguity without a hint.
     """
     from toolimit.tools import tool_spec
 
@@ -210,7 +251,7 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     forward = camera.rotation[:, 2]
     if np.linalg.norm(forward[:2]) < 1e-3:
         raise TrackError("camera: it looks straight up or down; the lift needs a camera facing the working plane")
-    normal = np.array([forward[0], forward[1], 0.0]) / np.linalg.norm(forward[:2])
+    normal = _plane_normal(forward, settings.plane_normal)
 
     head_frames = np.flatnonzero(tracks.head_visible)
     head_rays = camera.rays(tracks.head[head_frames])
@@ -223,30 +264,21 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     handle_frames = np.flatnonzero(tracks.handle_visible)
     handle_rays = camera.rays(tracks.handle[handle_frames])
     near, far, offset = handle_candidates(origin, handle_rays, head[handle_frames], length)
-    far_chosen, hint_used = _handle_sides(near, far, offset, settings)
-    signed = np.where(far_chosen, offset, -offset)
+    _check_plane_fits(origin, handle_rays, head[handle_frames], length)
+    head_moves = _head_moves(camera, tracks, head_frames, normal, distance, distance_sigma, settings, widths[0])
+    offset_sigma = _handle_spreads(camera, tracks, handle_frames, head, head_moves, length, settings, widths[1])[2]
+    sides = choose_sides(near, far, offset, offset_sigma, settings.handle_hint)
+    signed = np.where(sides.far, offset, -offset)
     if settings.offset_smoothing > 0:
         signed = _filtered(signed[:, None], handle_frames, tracks.n_frames, settings.offset_smoothing)[handle_frames, 0]
-    far_chosen = signed > 0
     foot, _ = squared_offset(origin, handle_rays, head[handle_frames], length)
     handle = _filled(_on_ray(origin, handle_rays, foot + signed), handle_frames, tracks.n_frames)
     axis = handle - head
     handle = head + length * axis / np.linalg.norm(axis, axis=1, keepdims=True)
 
-    head_sigma, handle_sigma = _uncertainty(
-        camera,
-        tracks,
-        head_frames,
-        handle_frames,
-        head,
-        handle,
-        normal,
-        distance,
-        distance_sigma,
-        length,
-        settings,
-        widths,
-    )
+    head_sigma = np.sqrt(sum(np.sum((moved - head) ** 2, axis=1) for moved in head_moves))
+    handle_sigma = _handle_sigma(camera, tracks, handle_frames, head, handle, head_moves, length, settings, widths[1])
+    nearest = _nearest(handle_frames, tracks.n_frames)
     demo = ToolDemo(head, handle, fps, tool, source=f"lifted from 2D tracks ({tracks.n_frames} frames)")
     return LiftedDemo(
         demo=demo,
@@ -254,12 +286,48 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
         handle_sigma=handle_sigma,
         head_filled=~tracks.head_visible,
         handle_filled=~tracks.handle_visible,
-        handle_far=_filled(far_chosen[:, None].astype(float), handle_frames, tracks.n_frames)[:, 0] > 0.5,
+        handle_far=_filled(
+            np.where(signed != 0, signed > 0, sides.far)[:, None].astype(float), handle_frames, tracks.n_frames
+        )[:, 0]
+        > 0.5,
+        side_source=sides.source[nearest],
+        side_margin=sides.margin[nearest],
+        mirror_distance=_filled(2 * offset[:, None], handle_frames, tracks.n_frames)[:, 0],
         plane_normal=normal,
         plane_distance=distance,
-        hint_used=hint_used,
+        hint_used=settings.handle_hint is not None and bool(np.any(sides.source == "hint")),
         pixel_smoothing=widths,
     )
+
+
+def _nearest(frames: np.ndarray, n_frames: int) -> np.ndarray:
+    """(n_frames,) the index into ``frames`` (sorted) of the nearest one to each frame."""
+    every = np.arange(n_frames)
+    after = np.clip(np.searchsorted(frames, every), 0, len(frames) - 1)
+    before = np.clip(after - 1, 0, len(frames) - 1)
+    return np.where(np.abs(frames[before] - every) <= np.abs(frames[after] - every), before, after)
+
+
+#: The working plane must face the camera within this angle (degrees) of its viewing direction.
+MAX_PLANE_ANGLE = 75.0
+
+
+def _plane_normal(forward: np.ndarray, given: tuple[float, float] | None) -> np.ndarray:
+    """(3,) the working plane's horizontal unit normal, pointing away from the camera (viewing
+    direction ``forward`` (3,), world): ``given`` (x, y) or the viewing direction made horizontal."""
+    facing = np.array([forward[0], forward[1], 0.0]) / np.linalg.norm(forward[:2])
+    if given is None:
+        return facing
+    normal = np.array([given[0], given[1], 0.0]) / math.hypot(*given)
+    if normal @ facing < 0:
+        normal = -normal
+    angle = math.degrees(math.acos(min(1.0, float(normal @ facing))))
+    if angle > MAX_PLANE_ANGLE:
+        raise TrackError(
+            f"plane_normal {given}: the working plane is seen {90 - angle:.0f} deg from edge-on (its normal "
+            f"{angle:.0f} deg from the camera's viewing direction, at most {MAX_PLANE_ANGLE:g})"
+        )
+    return normal
 
 
 def pixel_widths(tracks: EndpointTracks, smoothing: float | None) -> tuple[float, float]:
@@ -335,6 +403,21 @@ def _filtered(values: np.ndarray, frames: np.ndarray, n_frames: int, width: floa
     return gaussian_filter1d(padded, width, axis=0, mode="nearest")[pad : pad + n_frames]
 
 
+def _check_plane_fits(origin: np.ndarray, rays: np.ndarray, heads: np.ndarray, length: float) -> None:
+    """TrackError when the handle's rays (m, 3) pass farther than ``length + MISS_MARGIN`` metres
+    from the lifted heads (m, 3) in more than ``MAX_MISSED_SHARE`` of the frames: no tool of that
+    length joins them, so the working plane is not where the head moves."""
+    _, squared = squared_offset(origin, rays, heads, length)
+    missed = squared < length**2 - (length + MISS_MARGIN) ** 2
+    if np.mean(missed) > MAX_MISSED_SHARE:
+        raise TrackError(
+            f"tracks: the working plane does not fit: in {int(np.sum(missed))} of {len(missed)} frames the handle "
+            f"end's ray passes more than {MISS_MARGIN:g} m beyond the tool's length ({length:g} m) from the lifted "
+            "head; if the motion is not square to the camera, give its plane's normal (--plane-normal x,y), or a "
+            "point of it (--plane-point x,y,z)"
+        )
+
+
 def _check_visible(tracks: EndpointTracks, min_share: float) -> None:
     """TrackError unless each end is visible in enough frames to lift and interpolate."""
     needed = max(MIN_FRAMES, math.ceil(min_share * tracks.n_frames))
@@ -393,129 +476,174 @@ def _filled(points: np.ndarray, frames: np.ndarray, n_frames: int) -> np.ndarray
     return np.stack([np.interp(every, frames, points[:, k]) for k in range(points.shape[1])], axis=1)
 
 
-def _smoothest_sides(near: np.ndarray, far: np.ndarray, preferred: np.ndarray | None) -> tuple[np.ndarray, float]:
-    """Per frame, far (True) or near: the choice whose path has the least summed squared
-    acceleration (dynamic programming over the pair of the last two choices), plus, with
-    ``preferred`` (N,) bool, a tie-breaking cost for every frame that leaves it. Returns the
-    choice and its acceleration cost."""
-    candidates = np.stack([near, far], axis=1)  # (N, 2, 3)
-    n = len(candidates)
-    if n < 3:
-        return np.zeros(n, dtype=bool), 0.0
-    # cost[a, b]: best cost of a path whose last two choices are a (frame t-1) and b (frame t)
-    bias = np.zeros((n, 2)) if preferred is None else _leave_cost(candidates, preferred)
-    cost = bias[0][:, None] + bias[1][None, :]
-    back = np.zeros((n, 2, 2), dtype=int)
-    for t in range(2, n):
-        # acceleration[a, b, c] for choices a, b, c at frames t-2, t-1, t
-        acceleration = (
-            candidates[t][None, None, :, :]
-            - 2 * candidates[t - 1][None, :, None, :]
-            + candidates[t - 2][:, None, None, :]
-        )
-        total = cost[:, :, None] + np.sum(acceleration**2, axis=-1) + bias[t][None, None, :]
-        back[t] = np.argmin(total, axis=0)
-        cost = np.min(total, axis=0)
-    last = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    choice = np.zeros(n, dtype=int)
-    choice[-2], choice[-1] = last
-    for t in range(n - 1, 1, -1):
-        choice[t - 2] = back[t, choice[t - 1], choice[t]]
-    far_chosen = choice.astype(bool)
-    return far_chosen, _acceleration_cost(np.where(far_chosen[:, None], far, near))
+@dataclass(frozen=True, eq=False)
+class SideChoice:
+    """Each visible handle frame's side and why (see :class:`LiftedDemo`).
+
+    Attributes:
+        far: (m,) bool, the far solution taken.
+        source: (m,) str, one of ``SIDE_SOURCES``.
+        margin: (m,) the evidence (squared standard deviations) of the weakest zero crossing between
+            the frame and the hinted side; 0 on the hinted side.
+    """
+
+    far: np.ndarray
+    source: np.ndarray
+    margin: np.ndarray
 
 
-def _leave_cost(candidates: np.ndarray, preferred: np.ndarray) -> np.ndarray:
-    """(N, 2) the cost of leaving ``preferred`` (N,) bool (True: far) at each frame, ``HINT_WEIGHT``
-    times the two solutions' squared separation."""
-    separation = np.sum((candidates[:, 1] - candidates[:, 0]) ** 2, axis=1)
-    bias = np.zeros((len(candidates), 2))
-    bias[np.arange(len(candidates)), (~preferred).astype(int)] = HINT_WEIGHT * separation
-    return bias
+def choose_sides(
+    near: np.ndarray, far: np.ndarray, offset: np.ndarray, offset_sigma: np.ndarray, hint: str | None
+) -> SideChoice:
+    """The side of each visible handle frame, from its depth offset ``offset`` (m,) metres from the
+    head's foot on the ray (the near and far solutions ``near``, ``far`` (m, 3) are that far either
+    side), the offset's standard uncertainty ``offset_sigma`` (m,) metres, and the user's ``hint``.
 
+    A stretch and its mirror image are equally consistent with the image, so the side changes only
+    where the offset comes within its noise of zero (a graze: a local minimum below twice its
+    uncertainty). There the frames around it (``CROSSING_WINDOW`` each side, weighted by their
+    uncertainty) are fitted by a quadratic in time twice: the signed offsets as a crossing (their
+    sign changed after the graze) and as a bounce (unchanged); the bounce's extra weighted squared
+    residual is the crossing's evidence (a crossing is a line through zero, a bounce a V with its
+    tip at zero; a tangent touch is a U, which both fit). Crossings with at least
+    ``SWITCH_EVIDENCE`` change the side; the stretches so separated alternate, the hinted side taken
+    by the ones holding most frames.
 
-def _acceleration_cost(path: np.ndarray) -> float:
-    return float(np.sum(np.diff(path, n=2, axis=0) ** 2))
-
-
-def _handle_sides(
-    near: np.ndarray, far: np.ndarray, offset: np.ndarray, settings: LiftSettings
-) -> tuple[np.ndarray, bool]:
-    """Far (True) or near per visible handle frame, and whether the hint decided."""
-    far_chosen, cost = _smoothest_sides(near, far, None)
-    mirrored = _acceleration_cost(np.where(far_chosen[:, None], near, far))
-    # Separations below a centimetre change nothing that matters: no ambiguity to report.
-    ambiguous = mirrored <= settings.mirror_ratio * cost + 1e-12 and np.max(offset) > 0.005
-    if not ambiguous:
-        return far_chosen, False
-    if settings.handle_hint is None:
+    Raises:
+        TrackError: no hint, and the two solutions more than ``NEGLIGIBLE_OFFSET`` apart in some frame:
+            a mirror ambiguity.
+    """
+    m = len(offset)
+    if hint is None and np.max(offset) >= NEGLIGIBLE_OFFSET:
         worst = int(np.argmax(offset))
         raise TrackError(
-            "tracks: mirror ambiguity: the handle end nearer to and farther from the camera than the head are "
-            f"equally smooth (squared acceleration {cost:.4g} and {mirrored:.4g} m^2; the two differ by up to "
-            f"{2 * offset[worst]:.2f} m); say which with --handle-hint near|far (LiftSettings.handle_hint)"
+            "tracks: mirror ambiguity: one view gives a motion and its mirror image, and the image does not tell "
+            f"on which side of the head the handle end is (the two sides differ by up to {2 * offset[worst]:.2f} m); "
+            "say which with --handle-hint near|far (LiftSettings.handle_hint)"
         )
-    preferred = np.full(len(near), settings.handle_hint == "far")
-    far_chosen, _ = _smoothest_sides(near, far, preferred)
-    return far_chosen, True
+    sigma = np.maximum(offset_sigma, OFFSET_SIGMA_FLOOR)
+    crossings, evidence = [], []
+    for t in range(1, m - 1):
+        if offset[t] <= offset[t - 1] and offset[t] < offset[t + 1] and offset[t] < 2 * sigma[t]:
+            strength = _crossing_evidence(offset, sigma, t)
+            if strength >= SWITCH_EVIDENCE:
+                crossings.append(t)
+                evidence.append(strength)
+    parity = np.zeros(m, dtype=int)
+    for t in crossings:
+        parity[t:] ^= 1
+    hinted = hint == "far"
+    # the parity whose frames are on the hinted side: the one most frames have
+    hinted_parity = int(np.sum(parity) > m / 2)
+    far_chosen = np.where(parity == hinted_parity, hinted, not hinted)
+    source = np.where(parity == hinted_parity, "hint", "crossing").astype("<U10")
+    margin = np.zeros(m)
+    bounds = [0, *crossings, m]
+    for k, (start, stop) in enumerate(zip(bounds[:-1], bounds[1:])):
+        if parity[start] != hinted_parity:
+            edges = [evidence[j] for j in (k - 1, k) if 0 <= j < len(evidence)]
+            margin[start:stop] = min(edges)
+        if np.max(offset[start:stop]) < NEGLIGIBLE_OFFSET:
+            source[start:stop] = "negligible"
+    return SideChoice(far=far_chosen.astype(bool), source=source, margin=margin)
 
 
-def _uncertainty(
+def _crossing_evidence(offset: np.ndarray, sigma: np.ndarray, graze: int) -> float:
+    """How much worse (weighted squared residual, squared standard deviations) a quadratic in time
+    fits the offsets (m,) metres around frame ``graze`` as a bounce than as a crossing
+    (:func:`choose_sides`); ``sigma`` (m,) metres weighs each frame."""
+    frames = np.arange(max(0, graze - CROSSING_WINDOW), min(len(offset), graze + CROSSING_WINDOW + 1))
+    if len(frames) < 5:
+        return 0.0
+    times = (frames - graze).astype(float)
+    design = np.column_stack([np.ones_like(times), times, times**2]) / sigma[frames, None]
+    residuals = []
+    for signs in (np.where(frames > graze, -1.0, 1.0), np.ones(len(frames))):
+        target = signs * offset[frames] / sigma[frames]
+        solution, *_ = np.linalg.lstsq(design, target, rcond=None)
+        residuals.append(float(np.sum((design @ solution - target) ** 2)))
+    return residuals[1] - residuals[0]
+
+
+def _head_moves(
     camera: Camera,
     tracks: EndpointTracks,
     head_frames: np.ndarray,
-    handle_frames: np.ndarray,
-    head: np.ndarray,
-    handle: np.ndarray,
     normal: np.ndarray,
     distance: float,
     distance_sigma: float,
-    length: float,
     settings: LiftSettings,
-    widths: tuple[float, float],
-) -> tuple[np.ndarray, np.ndarray]:
-    """(T,) standard uncertainty of head and handle end, metres: the changes caused by moving each
-    pixel coordinate of either end by the track noise left after that end's filter of ``widths``
-    (head, handle end; :func:`_pixel_steps`) and the plane by its
-    distance's uncertainty, added in quadrature (finite
-    differences of the lift itself); interpolated over the frames an end is not seen.
-
-    The handle end's: its ray's sideways move at its range, the move of the head's foot on the ray,
-    and the spread of its depth offset ``sqrt(q)`` from the foot (``q``: :func:`squared_offset`,
-    moved by both ends' pixels and the plane): the half-width of the image of ``q``'s +-1-sigma
-    interval, which is the linear ``sigma_q / (2 sqrt(q))`` away from the tangent and stays finite
-    (``sqrt(sigma_q) / 2``) where the ray grazes the tool-length sphere, where a finite difference
-    clamped at the tangent reports almost nothing."""
+    width: float,
+) -> list[np.ndarray]:
+    """The lifted head (T, 3 each) with the plane moved by its distance's uncertainty and with each
+    pixel coordinate moved by the track noise left after the head's filter of ``width`` frames."""
     origin, n_frames = camera.centre, tracks.n_frames
-    head_steps, handle_steps = (_pixel_steps(settings.pixel_noise, width) for width in widths)
     head_pixels = tracks.head[head_frames]
 
     def head_at(pixels: np.ndarray, plane: float) -> np.ndarray:
         return _filled(ray_plane_intersection(origin, camera.rays(pixels), normal, plane), head_frames, n_frames)
 
-    head_moves = [head_at(head_pixels, distance + distance_sigma)] + [
-        head_at(head_pixels + step, distance) for step in head_steps
+    return [head_at(head_pixels, distance + distance_sigma)] + [
+        head_at(head_pixels + step, distance) for step in _pixel_steps(settings.pixel_noise, width)
     ]
-    head_sigma = np.sqrt(sum(np.sum((moved - head) ** 2, axis=1) for moved in head_moves))
 
+
+def _handle_spreads(
+    camera: Camera,
+    tracks: EndpointTracks,
+    handle_frames: np.ndarray,
+    head: np.ndarray,
+    head_moves: list[np.ndarray],
+    length: float,
+    settings: LiftSettings,
+    width: float,
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """For the visible handle frames, under each move of :func:`_head_moves` and of the handle's
+    pixels by the track noise left after its filter of ``width`` frames: the moved rays (list of
+    (m, 3)), the spread of the head's foot on the ray (m,) metres and the spread of the depth offset
+    ``sqrt(q)`` (m,) metres (``q``: :func:`squared_offset`): the half-width of the image of ``q``'s
+    +-1-sigma interval, which is the linear ``sigma_q / (2 sqrt(q))`` away from the tangent and
+    stays finite (``sqrt(sigma_q) / 2``) where the ray grazes the tool-length sphere."""
+    origin = camera.centre
     handle_pixels = tracks.handle[handle_frames]
     heads = head[handle_frames]
     rays = camera.rays(handle_pixels)
     foot, squared_depth = squared_offset(origin, rays, heads, length)
-    ranges = np.sum(rays * (handle[handle_frames] - origin), axis=1)
     moves = [(rays, moved[handle_frames]) for moved in head_moves]
-    moves += [(camera.rays(handle_pixels + step), heads) for step in handle_steps]
-    sideways = foot_spread = depth_spread = np.zeros(len(handle_frames))
+    moves += [(camera.rays(handle_pixels + step), heads) for step in _pixel_steps(settings.pixel_noise, width)]
+    foot_spread = depth_spread = np.zeros(len(handle_frames))
     for moved_rays, moved_heads in moves:
         moved_foot, moved_depth = squared_offset(origin, moved_rays, moved_heads, length)
-        sideways = sideways + np.sum(((moved_rays - rays) * ranges[:, None]) ** 2, axis=1)
         foot_spread = foot_spread + (moved_foot - foot) ** 2
         depth_spread = depth_spread + (moved_depth - squared_depth) ** 2
     depth_spread = np.sqrt(depth_spread)
     positive = np.maximum(squared_depth, 0.0)
     offset_spread = (np.sqrt(positive + depth_spread) - np.sqrt(np.maximum(positive - depth_spread, 0.0))) / 2
-    seen = np.sqrt(sideways + foot_spread + offset_spread**2)
-    return head_sigma, _filled(seen[:, None], handle_frames, n_frames)[:, 0]
+    return [moved_rays for moved_rays, _ in moves], np.sqrt(foot_spread), offset_spread
+
+
+def _handle_sigma(
+    camera: Camera,
+    tracks: EndpointTracks,
+    handle_frames: np.ndarray,
+    head: np.ndarray,
+    handle: np.ndarray,
+    head_moves: list[np.ndarray],
+    length: float,
+    settings: LiftSettings,
+    width: float,
+) -> np.ndarray:
+    """(T,) the handle end's standard uncertainty, metres, its side taken as right: its ray's
+    sideways move at its range, the move of the head's foot on the ray and the depth offset's
+    spread (:func:`_handle_spreads`), in quadrature; interpolated over the frames it is not seen."""
+    rays = camera.rays(tracks.handle[handle_frames])
+    ranges = np.sum(rays * (handle[handle_frames] - camera.centre), axis=1)
+    moved_rays, foot_spread, offset_spread = _handle_spreads(
+        camera, tracks, handle_frames, head, head_moves, length, settings, width
+    )
+    sideways = sum(np.sum(((moved - rays) * ranges[:, None]) ** 2, axis=1) for moved in moved_rays)
+    seen = np.sqrt(sideways + foot_spread**2 + offset_spread**2)
+    return _filled(seen[:, None], handle_frames, tracks.n_frames)[:, 0]
 
 
 def _pixel_steps(noise: float, width: float) -> tuple[np.ndarray, np.ndarray]:
