@@ -33,10 +33,34 @@ def test_export_writes_csv_and_json(tmp_path, capsys):
     assert code == 0
     assert sorted(path.name for path in out.iterdir()) == ["joint_trajectory.csv", "joint_trajectory.json"]
     summary = json.loads((out / "joint_trajectory.json").read_text())
-    assert summary["rate_hz"] == 500.0 and summary["n_samples"] == 2012  # 4 s + two end spans of dt / 4, up to the next 2 ms
+    # within the limits at its own timing: 4 s + two end spans of dt, up to the next 2 ms
+    assert summary["rate_hz"] == 500.0 and summary["n_samples"] == 2043 and summary["open_loop"] is None
     printed = capsys.readouterr().out
-    assert re.search(r"retimed within panda's limits: 4\.021 s against 4\.000 s optimised \(1\.01x\)", printed)
-    assert printed.splitlines()[-1].startswith(f"wrote {out / 'joint_trajectory.csv'} (2012 samples at 500 Hz)")
+    assert re.search(r"retimed within panda's limits \(0\.01 rad .*\): 4\.083 s against 4\.000 s optimised", printed)
+    assert printed.splitlines()[-1].startswith(f"wrote {out / 'joint_trajectory.csv'} (2043 samples at 500 Hz)")
+
+
+def test_check_replays_the_export_open_loop_in_the_task(tmp_path, capsys):
+    """--check TASK: the shipped Panda spade task's reference motion, exported and replayed open-loop."""
+    from toolimit.learn import shipped_task
+    from toolimit.robots import make_robot
+    from toolimit.robots.motion_bound import MotionBound
+
+    task = shipped_task("spade", "3d")
+    task_file = task.save(tmp_path / "task.npz")
+    bound = MotionBound.of(make_robot("panda"))
+    q = np.clip(task.reference_q, bound.lower, bound.upper)  # the shipped reference touches joint 2's limit
+    directory = tmp_path / "reference"
+    save_npz(directory / "trajectory.npz", q=q, v=np.diff(q, axis=0) / task.control_dt, base=task.base,
+             joint_names=np.array(task.joint_names), dt=task.control_dt)
+    out = tmp_path / "robot"
+    code = main(["export", "--trajectory", str(directory), "--robot", "panda", "--out", str(out),
+                 "--check", str(task_file), "--check-episodes", "2"])
+    assert code == 0
+    summary = json.loads((out / "joint_trajectory.json").read_text())
+    assert summary["open_loop"]["episodes"] == 2
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("open-loop replay"))
+    assert re.fullmatch(r"open-loop replay in .*task\.npz: success [01]\.\d\d over 2 episodes, goal reward \d+\.\d\d", line)
 
 
 def test_a_too_fast_trajectory_is_slowed_down(tmp_path, capsys):
@@ -67,6 +91,27 @@ def test_refusals_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, make, 
     out = tmp_path / "robot"
     trajectory = str(make(tmp_path))
     code = main(["export", "--trajectory", trajectory, "--robot", robot, "--out", str(out)])
+    assert code == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and error.startswith("toolimit export: error: ")
+    assert re.search(message, error), error
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--rate", "1e15"], r"--rate: must be between 10 and 10000 Hz, got 1e\+15"),
+        (["--rate", "1e-3"], r"--rate: must be between 10 and 10000 Hz"),
+        (["--velocity-scale", "1.5"], r"--velocity-scale: must be a fraction of the limit in \(0, 1\], got 1\.5"),
+        (["--position-margin", "-0.1"], r"--position-margin: must be between 0 and 0\.5 rad"),
+        (["--subdivisions", "100000"], r"--subdivisions: must be at most 64"),
+    ],
+)
+def test_bad_settings_are_one_line_exit_2_and_write_nothing(tmp_path, capsys, flags, message):
+    out = tmp_path / "robot"
+    code = main(["export", "--trajectory", str(_trajectory_dir(tmp_path, 4.0)), "--robot", "panda", "--out", str(out),
+                 *flags])
     assert code == 2
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and error.startswith("toolimit export: error: ")

@@ -46,6 +46,11 @@ def test_every_method_has_a_cell_with_the_figures_fields(quick_results: Path) ->
     assert by_method["sparse_ppo"]["goal_reward"] == 0.0
     assert by_method["final"]["env_steps"] > by_method["sparse_ppo"]["env_steps"] > 0  # cloning rollouts on top
     assert by_method["lfd"]["env_steps"] >= 2_000  # the method's PPO budget (its episodes have their own horizon)
+    # learnt policies record their limit use; the planar arm publishes no acceleration limit and
+    # no export: its final cell has no open-loop column
+    assert by_method["final"]["limits"]["max_acceleration_ratio"] is None
+    assert 0.0 <= by_method["final"]["limits"]["share_of_steps_past_limits"] <= 1.0
+    assert by_method["final"]["exported"] is None and by_method["tool_only"]["limits"] is None
 
 
 def test_lfd_learns_from_a_scripted_scoop_the_robot_delivers_in_the_methods_scene(quick_results: Path) -> None:
@@ -88,7 +93,15 @@ def test_a_second_run_skips_saved_cells_and_a_removed_cell_comes_back_the_same(
 
 def test_markdown_marks_unmeasured_methods() -> None:
     cell = CellResult("hammer", "3d", "panda", "hammer_00", "final", 1.0, 1.0, [1.0], 10, 1.0)
-    row = "| hammer | 3d | panda | hammer_00 | - | - | 1.0 (1.00) | - | - | - |"
+    row = "| hammer | 3d | panda | hammer_00 | - | - | 1.0 (1.00) | - | - | - | - | - |"
+    assert markdown_table([cell]).splitlines()[-1] == row
+
+
+def test_markdown_shows_the_final_policys_limits_and_its_export() -> None:
+    limits = {"share_of_steps_past_limits": 0.25, "max_velocity_ratio": 0.95, "max_acceleration_ratio": 3.5}
+    exported = {"goal_reward_mean": 12.5, "success_rate": 0.9}
+    cell = CellResult("spade", "3d", "panda", "spade_00", "final", 15.0, 1.0, [15.0], 10, 1.0, limits, exported)
+    row = "| spade | 3d | panda | spade_00 | - | - | 15.0 (1.00) | - | - | - | 0.25 (0.95, 3.50) | 12.5 (0.90) |"
     assert markdown_table([cell]).splitlines()[-1] == row
 
 

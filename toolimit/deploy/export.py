@@ -99,7 +99,7 @@ def plan_export(
         )
     low, high = RATE_RANGE_HZ
     if not (math.isfinite(rate) and low <= rate <= high):
-        raise InputError(f"rate must be between {low:g} and {high:g} Hz, got {rate}")
+        raise InputError(f"rate must be between {low:g} and {high:g} Hz, got {rate:g}")
     path = retime(trajectory.q, trajectory.dt, limits, subdivisions)
     if path.duration * rate + 1 < MIN_SAMPLES:
         raise InputError(

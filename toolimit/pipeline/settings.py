@@ -169,7 +169,7 @@ class ExportSettings:
     def __post_init__(self) -> None:
         low, high = RATE_RANGE_HZ
         if not low <= self.rate <= high:
-            raise InvalidSetting("rate", f"must be between {low:g} and {high:g} Hz, got {self.rate}")
+            raise InvalidSetting("rate", f"must be between {low:g} and {high:g} Hz, got {self.rate:g}")
         if self.subdivisions is not None:
             _check_integer("subdivisions", self.subdivisions, 1)
             if self.subdivisions > MAX_SUBDIVISIONS:
