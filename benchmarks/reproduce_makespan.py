@@ -27,7 +27,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "reproduce" / "results.json"
-ADR_RUNS = (REPO / "benchmarks" / "results" / "adr_spade3d", REPO / "benchmarks" / "results" / "adr_spade3d_8M")
+ADR_RUNS = tuple(REPO / "benchmarks" / "results" / f"adr_spade3d_box_offset_seed{seed}" for seed in (0, 1, 2))
 #: The Panda spade_00 run's alignment and trajectory stages, 96 s (notebook 06, README "Learning",
 #: its run.json: 12.7 s + 83.2 s), rounded up: the preparation of a 3D experiment.
 PREPARATION_S = 100.0
