@@ -39,9 +39,13 @@ def _help(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
 
 def _table(parser: argparse.ArgumentParser) -> nodes.table:
     rows = [
-        (_flag_names(action) + (f" {action.metavar}" if action.option_strings and action.metavar else ""), _help(parser, action))
+        (
+            _flag_names(action) + (f" {action.metavar}" if action.option_strings and action.metavar else ""),
+            _help(parser, action),
+        )
         for action in parser._actions
-        if not isinstance(action, (argparse._HelpAction, argparse._SubParsersAction)) and action.help != argparse.SUPPRESS
+        if not isinstance(action, (argparse._HelpAction, argparse._SubParsersAction))
+        and action.help != argparse.SUPPRESS
     ]
     table = nodes.table()
     group = nodes.tgroup(cols=2)

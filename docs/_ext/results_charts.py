@@ -67,7 +67,12 @@ def paper_figure(tool: str) -> Chart:
     committed = (RESULTS / "reproduce" / f"results_{tool}.svg").read_text()
     if svg != committed:
         raise ExtensionError(f"benchmarks/results/reproduce/results_{tool}.svg is not the chart of results.json")
-    return Chart(svg, "benchmarks/results/reproduce/results.json", "toolimit reproduce --jobs 2 --out runs/reproduce", _commit(record))
+    return Chart(
+        svg,
+        "benchmarks/results/reproduce/results.json",
+        "toolimit reproduce --jobs 2 --out runs/reproduce",
+        _commit(record),
+    )
 
 
 def learning_grid() -> Chart:
@@ -77,7 +82,12 @@ def learning_grid() -> Chart:
     values = [[run["success_rate"], run["stochastic_success_rate"]] for run in runs]
     svg = _success_bars(labels, values, ["deterministic", "stochastic"], "Panda spade: success over 20 episodes")
     commits = sorted({run.get("commit", "?") for run in runs})
-    return Chart(svg, "benchmarks/results/steady_learning.json", "python benchmarks/steady_learning.py", "per run: " + ", ".join(commits))
+    return Chart(
+        svg,
+        "benchmarks/results/steady_learning.json",
+        "python benchmarks/steady_learning.py",
+        "per run: " + ", ".join(commits),
+    )
 
 
 def adr() -> Chart:
@@ -91,16 +101,30 @@ def adr() -> Chart:
         commits.append(evaluation["commit"])
     control = _load("adr_spade3d_uniform_rectangle_seed0/evaluation.json")
     heat = control["heat_map"]
-    labels.append(f"no curriculum, seed 0 ({heat['succeeding_reachable_in_rectangle']} of {heat['standing_reachable_in_rectangle']})")
-    values.append([heat["succeeding_reachable_in_rectangle"] / heat["standing_reachable_in_rectangle"], control["success_rate"]])
+    labels.append(
+        f"no curriculum, seed 0 ({heat['succeeding_reachable_in_rectangle']} of {heat['standing_reachable_in_rectangle']})"
+    )
+    values.append(
+        [heat["succeeding_reachable_in_rectangle"] / heat["standing_reachable_in_rectangle"], control["success_rate"]]
+    )
     commits.append(control["commit"])
-    svg = _success_bars(labels, values, ["reachable positions succeeding", "aligned box"], "Domain randomisation, Panda spade, 12 M steps")
+    svg = _success_bars(
+        labels,
+        values,
+        ["reachable positions succeeding", "aligned box"],
+        "Domain randomisation, Panda spade, 12 M steps",
+    )
     command = (
         "toolimit learn --env toolimit/Spade3D-v0 --adr --preset toolimit --learning-rate 1e-4 --target-kl 0.1 "
         "--timesteps 12000000 --adr-every 8 --seed S --out runs/adr_offset; "
         "toolimit evaluate --policy runs/adr_offset --heat-map runs/adr_offset/heat_map.svg"
     )
-    return Chart(svg, "benchmarks/results/adr_spade3d_box_offset_seed{0,1,2}/evaluation.json", command, ", ".join(dict.fromkeys(commits)))
+    return Chart(
+        svg,
+        "benchmarks/results/adr_spade3d_box_offset_seed{0,1,2}/evaluation.json",
+        command,
+        ", ".join(dict.fromkeys(commits)),
+    )
 
 
 def scythe() -> Chart:
@@ -110,9 +134,18 @@ def scythe() -> Chart:
         labels.append(f"scythe_0{demo}")
         values.append([evaluation["success_rate"]])
         commits.append(evaluation["commit"])
-    svg = _success_bars(labels, values, ["final policy"], "Scythe with the authors' action span: success over 20 episodes")
-    command = "toolimit run --tool scythe --robot panda --demo data/demos/scythe_0i.npz --action-limit 3 --out runs/scythe_0i"
-    return Chart(svg, "benchmarks/results/scythe_action_limit/scythe_0*/evaluation.json", command, ", ".join(dict.fromkeys(commits)))
+    svg = _success_bars(
+        labels, values, ["final policy"], "Scythe with the authors' action span: success over 20 episodes"
+    )
+    command = (
+        "toolimit run --tool scythe --robot panda --demo data/demos/scythe_0i.npz --action-limit 3 --out runs/scythe_0i"
+    )
+    return Chart(
+        svg,
+        "benchmarks/results/scythe_action_limit/scythe_0*/evaluation.json",
+        command,
+        ", ".join(dict.fromkeys(commits)),
+    )
 
 
 def timed_tools() -> Chart:
@@ -131,7 +164,11 @@ def talos() -> Chart:
     rows = [row for row in record["rows"] if "variant" in row]
     groups = [BarGroup(row["variant"], [row["best_spheres"], row["median_spheres"]]) for row in rows]
     svg = log_bar_chart_svg(
-        groups, ["best robot replay", "median"], title="Talos: robot replays of 40 candidates (spheres in the box)", y_label="spheres", threshold=10.0
+        groups,
+        ["best robot replay", "median"],
+        title="Talos: robot replays of 40 candidates (spheres in the box)",
+        y_label="spheres",
+        threshold=10.0,
     )
     return Chart(svg, "benchmarks/results/talos_selection.json", str(record["command"]), _commit(record))
 
@@ -142,7 +179,13 @@ def video_lift() -> Chart:
     record = _load("video_lift/results.json")
     rows = [row for row in record["lift"] if row["noise_px"] == 3.0]
     groups = [BarGroup(row["name"], [row["head_error_cm"], row["axis_error_deg"]]) for row in rows]
-    svg = log_bar_chart_svg(groups, ["head error (cm)", "axis error (deg)"], title="Video lift at 3 px of noise, mean over 5 seeds", y_label="error", floor=0.1)
+    svg = log_bar_chart_svg(
+        groups,
+        ["head error (cm)", "axis error (deg)"],
+        title="Video lift at 3 px of noise, mean over 5 seeds",
+        y_label="error",
+        floor=0.1,
+    )
     return Chart(svg, "benchmarks/results/video_lift/results.json", "python benchmarks/video_lift.py", _commit(record))
 
 
@@ -154,8 +197,21 @@ def performance() -> Chart:
         record = _load(f"learning_throughput_{name}.json")
         groups.append(BarGroup(name, [record["ratio"]]))
         commits.append(record["commit"])
-    svg = log_bar_chart_svg(groups, ["training throughput / SB3's ceiling"], title="Learning throughput against SB3's ceiling", y_label="ratio", threshold=0.7, threshold_label="target", floor=0.01)
-    return Chart(svg, "benchmarks/results/learning_throughput_*.json", "python benchmarks/learning_throughput.py --env toolimit/NAME-v0", ", ".join(dict.fromkeys(commits)))
+    svg = log_bar_chart_svg(
+        groups,
+        ["training throughput / SB3's ceiling"],
+        title="Learning throughput against SB3's ceiling",
+        y_label="ratio",
+        threshold=0.7,
+        threshold_label="target",
+        floor=0.01,
+    )
+    return Chart(
+        svg,
+        "benchmarks/results/learning_throughput_*.json",
+        "python benchmarks/learning_throughput.py --env toolimit/NAME-v0",
+        ", ".join(dict.fromkeys(commits)),
+    )
 
 
 CHARTS: dict[str, Callable[[], Chart]] = {
