@@ -88,5 +88,22 @@ def _plain_bars(app, what, name, obj, options, lines: list[str]) -> None:  # noq
         lines[index] = "``".join(part if k % 2 else part.replace("|", r"\|") for k, part in enumerate(parts))
 
 
+#: Shown at the top of every notebook's page: its figures come from the quick budgets.
+QUICK_BUDGET_NOTE = (
+    '<div class="admonition note quick-budget"><p class="admonition-title">Quick budgets</p><p>This notebook was '
+    "executed while the site was built, with <code>TOOLIMIT_QUICK=1</code>: its learning and search budgets are "
+    "a few seconds' worth, so its figures show each stage at work, not what a full run achieves (the "
+    '<a href="../results/index.html">results</a> do). Run it at its default budgets with <code>jupyter lab '
+    "notebooks/</code>.</p></div>"
+)
+
+
+def _label_quick_budget_figures(app, pagename: str, templatename: str, context: dict, doctree) -> None:  # noqa: ANN001
+    """Every notebook page says its outputs were made on the quick budgets."""
+    if pagename.startswith("notebooks/") and "body" in context:
+        context["body"] = QUICK_BUDGET_NOTE + context["body"]
+
+
 def setup(app) -> None:  # noqa: ANN001
     app.connect("autodoc-process-docstring", _plain_bars)
+    app.connect("html-page-context", _label_quick_budget_figures)
