@@ -10,7 +10,9 @@ system's, and no page loads a script from elsewhere.
 
 ``TOOLIMIT_DOCS_EXECUTE`` chooses how notebooks are executed: ``force`` (default, what CI does),
 ``cache`` (re-run only notebooks that changed) or ``off`` (render them without outputs, e.g. while
-writing a page).
+writing a page). ``TOOLIMIT_DOCS_EXECUTED_NOTEBOOKS`` names a folder of notebooks already executed
+on the quick budgets (e.g. by the test suite): a notebook found there, with the same cells as
+``notebooks/``, is rendered with its outputs instead of being executed again.
 """
 
 from __future__ import annotations
@@ -104,6 +106,28 @@ def _label_quick_budget_figures(app, pagename: str, templatename: str, context: 
         context["body"] = QUICK_BUDGET_NOTE + context["body"]
 
 
+def _use_executed_notebook(app, docname: str, source: list[str]) -> None:  # noqa: ANN001
+    """A notebook executed already (``TOOLIMIT_DOCS_EXECUTED_NOTEBOOKS``) replaces the stored one's
+    text, marked not to be executed again; it must hold the stored notebook's cells, else the build
+    stops (an execution of another version of the notebook would show outputs it does not make)."""
+    folder = os.environ.get("TOOLIMIT_DOCS_EXECUTED_NOTEBOOKS")
+    if not folder or not docname.startswith("notebooks/"):
+        return
+    import nbformat
+    from sphinx.errors import ExtensionError
+
+    path = Path(folder) / f"{Path(docname).name}.ipynb"
+    if not path.is_file():
+        return  # executed during the build
+    executed = nbformat.reads(path.read_text(encoding="utf-8"), as_version=4)
+    stored = nbformat.reads(source[0], as_version=4)
+    if [cell.source for cell in executed.cells] != [cell.source for cell in stored.cells]:
+        raise ExtensionError(f"{path}: its cells are not those of notebooks/{path.name}; execute it again")
+    executed.metadata.setdefault("mystnb", {})["execution_mode"] = "off"
+    source[0] = nbformat.writes(executed)
+
+
 def setup(app) -> None:  # noqa: ANN001
     app.connect("autodoc-process-docstring", _plain_bars)
     app.connect("html-page-context", _label_quick_budget_figures)
+    app.connect("source-read", _use_executed_notebook)

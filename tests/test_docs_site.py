@@ -180,7 +180,7 @@ def test_every_notebook_page_shows_its_figures(site: Path, browsed: dict):
         if browsed["pages"]["/" + page]["output_svgs"] + browsed["pages"]["/" + page]["output_images"] == 0
     ]
     assert not empty, f"notebook pages without a figure in their outputs: {empty}"
-    unlabelled = [page for page in notebooks if "TOOLIMIT_QUICK=1" not in (site / page).read_text(encoding="utf-8")]
+    unlabelled = [page for page in notebooks if "quick-budget" not in (site / page).read_text(encoding="utf-8")]
     assert not unlabelled, f"notebook pages that do not say their figures come from the quick budgets: {unlabelled}"
 
 
