@@ -25,9 +25,10 @@ DOCS = Path(__file__).resolve().parent
 REPO = DOCS.parent
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(DOCS / "_ext"))
-# The notebooks' kernels import this checkout and run on the quick budgets (as tests/test_notebooks.py).
+# The notebooks' kernels import this checkout and run on the quick budgets, offline (as tests/test_notebooks.py).
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))
 os.environ.setdefault("TOOLIMIT_QUICK", "1")
+os.environ.setdefault("RERUN_NOTEBOOK_ASSET", "inline")  # rerun's viewer from the wheel, not a CDN
 
 import toolimit  # noqa: E402
 
