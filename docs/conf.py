@@ -45,7 +45,8 @@ extensions = [
     "cli_reference",
     "results_charts",
 ]
-exclude_patterns = ["_build", "**/.ipynb_checkpoints", "Thumbs.db", ".DS_Store"]
+# notebooks/runs: what the notebooks write when executed (their runs), not pages.
+exclude_patterns = ["_build", "**/.ipynb_checkpoints", "notebooks/runs", "Thumbs.db", ".DS_Store"]
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 
 # MyST: heading anchors so that [text](page.md#section) links resolve (and are checked).
