@@ -18,7 +18,7 @@ not for the policy), too fast when most decisions hold or pull while the tests c
 schedule measured: while the tests limit the growth, pushes per PPO step scale as 1 / every, so the
 longest period that still grows the bounds as fast as the fastest schedule did is
 ``every_slow * pushes_slow / pushes_fast`` (per PPO step), rounded and kept between the two; the
-README ("Domain randomisation") reads the figures. The measurement:
+docs/domain_randomisation.md reads the figures. The measurement:
 
     toolimit learn --env toolimit/Spade3D-v0 --adr --preset toolimit --timesteps 1500000 \\
         --adr-every K --out runs/adr_everyK          # K = 2 and 10, seed 0

@@ -9,7 +9,7 @@ cell's time less the preparation) and each baseline's. Prints the makespan for 1
 ``nodes`` nodes and its two lower bounds: the longest single run with its preparation (whatever
 the number of nodes) and the total work divided by the slots.
 
-The cells' times were measured two or three runs at a time on two cores (README, "The paper's
+The cells' times were measured two or three runs at a time on two cores (docs/results/paper_figure.md, "The paper's
 experiments"), not one at a time on an idle machine: a run alone on its own core is, if anything,
 faster, so the figure is an upper estimate for nodes as fast as this machine's cores. The domain
 randomisation runs (``toolimit learn --adr``) are one learning run each, which no cluster splits:
@@ -27,8 +27,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "reproduce" / "results.json"
-ADR_RUNS = (REPO / "benchmarks" / "results" / "adr_spade3d", REPO / "benchmarks" / "results" / "adr_spade3d_8M")
-#: The Panda spade_00 run's alignment and trajectory stages, 96 s (notebook 06, README "Learning",
+ADR_RUNS = tuple(REPO / "benchmarks" / "results" / f"adr_spade3d_box_offset_seed{seed}" for seed in (0, 1, 2))
+#: The Panda spade_00 run's alignment and trajectory stages, 96 s (notebook 06, docs/learning.md,
 #: its run.json: 12.7 s + 83.2 s), rounded up: the preparation of a 3D experiment.
 PREPARATION_S = 100.0
 

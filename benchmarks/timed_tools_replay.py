@@ -4,7 +4,7 @@ For each demonstration: stage ii (alignment, a quick budget) then stage iii (eve
 tracked by the robot and replayed in its scene). Prints, per demonstration, the best candidate's
 alignment reward (``tool_alone``: mean goal reward of its replays of the whole aligned motion), the
 best robot replay reward (``robot``), and for the kept candidate its episode's tool-alone reward
-and both success rates (:func:`success_rates`), and writes them as JSON. The issue's bar: both > 0 on all five demonstrations of each tool.
+and both success rates (:func:`success_rates`), and writes them as JSON. The bar: both > 0 on all five demonstrations of each tool.
 For every candidate it also says how its first reward came (:func:`first_reward_motion`): the
 head's speed and the roll's turn over that control step.
 

@@ -1,4 +1,4 @@
-"""The working plane's depth from the tool's length, measured against the ground contacts (issue 26).
+"""The working plane's depth from the tool's length, measured against the ground contacts.
 
 The lift places the vertical working plane at the depth where the head's rays meet the ground
 (``lift_tracks``). The alternative measured here: if both ends lay in the plane at depth ``d``,
@@ -40,7 +40,7 @@ from toolimit.demos.video.lift import smoothed
 from toolimit.tools import tool_spec
 
 #: The lift's pixel filter when these figures were measured (1 frame for both ends; the lift now
-#: chooses each end's by cross-validation), kept so that the README's figures stay reproducible.
+#: chooses each end's by cross-validation), kept so that the history's figures stay reproducible.
 PIXEL_SMOOTHING = 1.0
 
 

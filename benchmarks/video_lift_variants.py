@@ -1,4 +1,4 @@
-"""Issue 26's two missed targets, measured against the lift's alternatives (README, "Stage (i) from a video").
+"""The lift's two missed targets, measured against its alternatives (docs/results/video_lift.md, docs/history.md).
 
 1. The spade example's head error comes from the working plane's depth. Printed for each trajectory:
    each contact event's nearest ray-ground meeting (an event: a run of frames whose noise-free

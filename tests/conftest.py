@@ -36,7 +36,7 @@ def loopback_ray_cluster() -> Iterator[str]:
     skip where Ray is absent. One per module, not per session: a cluster shared from
     tests/experiments through tests/test_distributed.py's private-Ray test failed the alignment
     test that followed (its actors "cancelled before they started"), a fresh one did not (see the
-    README, "On a Ray cluster")."""
+    docs/ray.md#on-a-ray-cluster)."""
     pytest.importorskip("ray", reason='Ray is not installed (the extra: pip install -e ".[ray]")')
     from ray.cluster_utils import Cluster
 

@@ -1,4 +1,4 @@
-"""The pipeline from Python: stage functions, the candidate a trajectory records, README's "From Python"."""
+"""The pipeline from Python: stage functions, the candidate a trajectory records, the "From Python" page (docs/python.md)."""
 
 from __future__ import annotations
 
@@ -213,9 +213,9 @@ def test_align_refuses_a_demonstration_of_another_tool(tmp_path: Path) -> None:
 
 
 def _readme_python_block() -> str:
-    readme = (REPO / "README.md").read_text()
-    section = readme.split("## From Python", 1)[1]
-    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    """The first Python block of the documentation's "From Python" page."""
+    page = (REPO / "docs" / "python.md").read_text()
+    return re.search(r"```python\n(.*?)```", page, re.S).group(1)
 
 
 @pytest.fixture(scope="module")
@@ -244,14 +244,14 @@ def command_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], Pa
 def test_the_readmes_python_chain_gives_what_toolimit_run_gives(
     command_run, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """README's block, on quick budgets, against ``toolimit run --quick`` with the same seed."""
+    """The "From Python" page's block, on quick budgets, against ``toolimit run --quick`` with the same seed."""
     block = _readme_python_block()
     assert 'PipelineSettings.for_world("planar")' in block and '"runs/spade_python"' in block
     block = block.replace('PipelineSettings.for_world("planar")', 'PipelineSettings.for_world("planar", quick=True)')
     block = block.replace('"runs/spade_python"', repr(str(tmp_path / "python")))
     monkeypatch.chdir(REPO)
     namespace: dict[str, object] = {}
-    exec(compile(block, "README.md", "exec"), namespace)
+    exec(compile(block, "docs/python.md", "exec"), namespace)
     from_python = namespace["evaluation"].record  # type: ignore[attr-defined]
     from_command = json.loads((command_run[1] / "evaluation.json").read_text())
     assert from_python["success_rate"] == from_command["success_rate"]

@@ -2,7 +2,7 @@
 
 The package is laid out as the pipeline of Zorina et al. (RA-L 2022):
 ``demos`` (i) -> ``scenes`` + ``align`` (ii) -> ``robots`` + ``trajopt`` (iii) -> ``learn`` (iv),
-chained by ``pipeline`` (each stage a function with typed settings, and ``run_pipeline``), with
+on the tool frame and tool registry of ``tools``, chained by ``pipeline`` (each stage a function with typed settings, and ``run_pipeline``), with
 ``deploy`` for export to a real robot, ``experiments`` for the paper's figure, ``viz`` for meshcat
 views and rerun recordings and ``cli`` for the ``toolimit`` command.
 
@@ -17,7 +17,19 @@ from types import ModuleType as _ModuleType
 __version__ = "0.1.0"
 
 #: The subpackages a user reaches as attributes of ``toolimit``, imported on first access.
-SUBPACKAGES = ("demos", "scenes", "align", "robots", "trajopt", "learn", "pipeline", "deploy", "experiments", "viz")
+SUBPACKAGES = (
+    "tools",
+    "demos",
+    "scenes",
+    "align",
+    "robots",
+    "trajopt",
+    "learn",
+    "pipeline",
+    "deploy",
+    "experiments",
+    "viz",
+)
 
 
 def __getattr__(name: str) -> _ModuleType:

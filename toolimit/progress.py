@@ -1,6 +1,7 @@
 """Progress of long work, shown the way its reader sees it.
 
 :func:`progress_bar` takes tqdm's arguments and picks, when the bar is made:
+
 - on a terminal (standard error is a TTY), tqdm's text bar, redrawn in place;
 - in a Jupyter notebook with ipywidgets, tqdm's widget;
 - anywhere else (a log file, a pipe, CI, a notebook without ipywidgets), :class:`LogLines`: one

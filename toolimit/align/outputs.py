@@ -1,6 +1,6 @@
 """The alignment's files: ``alignment.json`` (the search's record) and ``aligned_demo.npz``.
 
-Formats are the project's shared ones (see the README of the pipeline): the aligned demo is a
+Formats are the project's shared ones (docs/tutorial.md#ii-alignment-runsspade_planaralignment): the aligned demo is a
 demo file (head, handle, fps, tool) of the best candidate's motion as the tool alone reached it
 (within the tool speed limit, :func:`toolimit.scenes.replay.speed_limited`) in the scene's world
 frame plus the same motion's tool-frame poses (``tip_position`` (T, 3) m, ``tip_quaternion_wxyz``

@@ -127,12 +127,12 @@ def load_video_trajectory(
     """A real aligned trajectory: the demo, the full tip-frame poses and the scene parameters.
 
     Returns:
-        demo: head and handle points (world frame of the aligned scene, metres).
-        tip: ``ToolPose`` of the file's *tip frame* (position (T, 3) metres, rotation (T, 3, 3)):
-            the original code's frame, not this project's tool frame.
-        params: every other array of the file (e.g. ``goal_box_position`` (3,), ``nail_position``
-            (3,), ``sand_buffer_yaw``), plus ``handle_axis_in_tip_frame`` (3,), the tip-frame
-            direction used to place the handle end.
+        tuple: ``(demo, tip, params)``. ``demo``: head and handle points (world frame of the
+            aligned scene, metres). ``tip``: ``ToolPose`` of the file's *tip frame* (position
+            (T, 3) metres, rotation (T, 3, 3)): the original code's frame, not this project's tool
+            frame. ``params``: every other array of the file (e.g. ``goal_box_position`` (3,),
+            ``nail_position`` (3,), ``sand_buffer_yaw``), plus ``handle_axis_in_tip_frame`` (3,),
+            the tip-frame direction used to place the handle end.
     """
     path = Path(path)
     if not path.is_file():

@@ -21,7 +21,7 @@ The curve approximates the samples rather than passing through them: at sample t
 (q_{t-1} + 4 q_t + q_{t+1}) / 6 for equal spans, within a sixth of the second difference of q_t.
 :attr:`RetimedPath.path_deviation` reports the largest gap.
 
-Why not a time-parameterisation library (measured on the README's Panda trajectory, 103 steps,
+Why not a time-parameterisation library (measured on the Panda trajectory of docs/cli.md#examples, 103 steps,
 toppra 0.6.10 and ruckig 0.19.4 from PyPI): toppra is time-optimal under velocity and
 acceleration limits only; on its own cubic spline through the samples its result passed a
 position limit by 0.027 rad and reached 2.9x the jerk limit (finite differences at 1 kHz), it

@@ -64,7 +64,7 @@ SHIPPED_DEMOS = Path("data/demos")
 #: The span of the actions in ``full`` (rad/s on every joint, ``LearningConfig.action_limit``): the
 #: authors' environment clips the commanded velocities there (pyphysx_envs ``RobotEnv.step``),
 #: beyond the Panda's limits. With the Panda's own limits the scythe succeeds on 2 of its 5
-#: demonstrations, with this span on 4 (README, "The authors' action clip").
+#: demonstrations, with this span on 4 (docs/results/scythe.md#the-authors-action-clip).
 AUTHORS_ACTION_LIMIT = 3.0
 PRESETS = ("quick", "planar", "full")
 

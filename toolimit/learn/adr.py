@@ -22,22 +22,13 @@ the aligned position (the task's) and move by boundary tests, run during PPO by
 This is the rule of OpenAI's ADR (Akkaya et al. 2019, "Solving Rubik's Cube with a Robot Hand",
 algorithm 1: a buffer of boundary performances per bound, a decision once it holds m entries,
 expand at or above t_H, shrink at or below t_L, the buffer cleared), with the paper's success as
-the performance. The authors' code (``docs/original_setup.md#adr``) tests one batch every 100
-iterations and pushes when its mean return (per-step average of spheres in the box) exceeds 0.5,
-pulls below 0: a spade succeeds at a return of about 5, so their bounds could grow where the policy
-delivered a tenth of what success takes (the project's earlier runs with that rule, every 2
-updates: 63 % of 868 tests pushed, the full rectangle at 0.94 M steps, 5 of its 15 positions
-succeeding after 8 M). Here a bound moves out only where the policy already succeeds at it in 4
-episodes of 5. That is stricter than the target's standard for a position (success in at least half
-of its episodes, :mod:`toolimit.learn.heat_map`), on purpose: pushed at 0.5 (the Panda spade, seed
-0, ``--preset toolimit``, every 8 updates) the bounds reached 25 x 45 cm at 1.1 M steps (at 0.8:
-15 x 35 cm at 2.4 M), and the training success over 50 updates fell from 0.86 at 2.0 M steps to
-0.04 at 3.0 M; 20 pulls shrank the bounds to 15 x 0 cm by 5 M steps without it recovering (0.19),
-where the 0.8 run's never fell below 0.5 in 12 M. With 32 episodes a bound where
-the policy truly succeeds 90 % of the time is pushed with probability 0.96, at 60 % with 0.01, and
-one at 20 % or below is pulled with probability >= 0.54 (binomial). Their bounds could reach +-0.5
-m on both coordinates and their reset never passed the sampled position to the scene, a bug not
-reproduced here.
+the performance. The authors' code (``docs/original_setup.md#adr``) pushes on a batch's mean return
+above 0.5, a tenth of what a spade's success takes, so their bounds grew where the policy failed;
+here a bound moves out only where the policy already succeeds at it in 4 episodes of 5, stricter
+than a heat-map position's standard (half of its episodes, :mod:`toolimit.learn.heat_map`) because
+pushing at 0.5 let the training collapse. With 32 episodes a bound where the policy truly succeeds
+90 % of the time is pushed with probability 0.96, at 60 % with 0.01 (binomial). Their reset never
+passed the sampled position to the scene, a bug not reproduced here.
 
 Only the coordinates the scene uses are randomised (:attr:`AdrBounds.axes`): x and y in 3D, x alone
 in the planar x-z world, whose box ignores y. A position that makes the scene invalid (the box on
@@ -47,28 +38,18 @@ An episode whose box fell back to the aligned position was not played at the bou
 says nothing of it: it never joins a buffer. A bound where no box position inside the other bounds
 is valid (the near x bound whose whole y range stands on the deposit) is not tested: another bound
 is picked from the same generator, and if none is placeable the test is skipped; the learning
-record counts both (``repicked``, ``skipped``). Without this, such a bound's tests ran at the
-aligned box, succeeded, and filled its buffer with successes it had not earned.
-The default period :data:`EVERY` (8 updates) was chosen by measurement (README, "Domain
-randomisation"; ``benchmarks/adr_schedule.py``): on the Panda spade, seed 0, 1.5 M PPO steps,
-testing every 10 updates pushed at 14 of 16 decisions with 95 % success at the bounds (the tests,
-not the policy, limited the growth: 9.3 pushes per M steps); every 2 updates pushed at 18 of 80 with
-70 % (the policy limited it: 12.0 per M steps, for half an extra episode per training episode);
-the period that matches every 2's growth when tests limit it is 10 x 9.3 / 12.0 = 7.75. The full
-rectangle needs at least 38 pushes in 3D (10 + 10 + 9 + 9), i.e. 76 tests of one batch; a test
-costs one batch of B episodes, an eighth of the simulation at this period.
+record counts both (``repicked``, ``skipped``), so that no buffer fills with successes not earned
+at its bound. The default period :data:`EVERY` (8 updates) is the longest that grows the bounds as
+fast as testing every 2 updates, measured by ``benchmarks/adr_schedule.py``
+(``docs/domain_randomisation.md#domain-randomisation`` gives the figures).
 
 What the policy observes: the box's offset from the aligned position in units of
 :data:`BOX_OFFSET_UNIT` (0.1 m; :meth:`AdrBounds.observed`), and, after cloning, the first layer's
 weights on those two inputs (policy and value networks) are zeroed
 (:func:`toolimit.learn.ppo.blind_to_goal_box`). The clone saw the aligned box only, where the offset
 is 0, so it is unchanged there and starts PPO blind to the box elsewhere, instead of with weights
-that cloning never constrained. In world metres the box moved the network's input by a few tenths
-where the joints move it by radians, and Adam moves each weight by about the learning rate, so the
-box's weights were the slowest to shape the output. Measured on the Panda spade,
-``--preset toolimit --learning-rate 1e-4 --target-kl 0.1``, 12 M steps, seeds 0, 1, 2: the policy
-succeeds at 8, 9 and 8 of the 10 reachable heat-map positions (in world metres: 6, 5 and 7; README,
-"Domain randomisation").
+that cloning never constrained; in world metres the box's inputs were too small for Adam's steps to
+shape the output soon (``docs/results/adr.md`` has the runs).
 """
 
 from __future__ import annotations

@@ -92,18 +92,9 @@ OPTIMIZERS: dict[str, type[torch.optim.Optimizer]] = {"adam": torch.optim.Adam, 
 
 
 #: ``authors``: docs/original_setup.md#ppo, the default. ``toolimit``: the same with the gradient norm
-#: clipped at 0.5 instead of 0.001, one episode per update and RAdam. Measured on the shipped planar
-#: spade (with Adam; cloned from 8 rollouts, 3,000 cloning steps, 16 environments, 20 evaluation
-#: episodes every 6,912 steps up to 48 k, seed 0): ``authors`` keeps the deterministic success at 1.0
-#: throughout and moves the stochastic one from 0.50 to 0.60-0.80; ``toolimit`` lifts the stochastic
-#: success to 0.75-1.00 but lets the deterministic one swing between 0.75 and 1.0. 4-5 epochs with
-#: normalised advantages (lr 1e-4 or 3e-4, clip 0.1) destroyed the cloned policy within 20 k steps.
-#: With Adam the looser clip let the first update after cloning jump (the authors' 0.001 clip keeps
-#: Adam's steps small only because the clipped gradients fall below its epsilon): on the Panda spade
-#: under ADR an approximate KL of 34.9, the training success from 0.88 to 0 in four updates; with
-#: RAdam 0.0004, the success 0.44-0.94 over the first eight updates. On ``scythe_03`` (1.5 M steps,
-#: seed 0) RAdam's run ended at 0.25 deterministic success (8.8 stalks), Adam's at 0.00 (4.9), the
-#: ``authors`` preset's at 0.00 (2.8).
+#: clipped at 0.5 instead of 0.001, one episode per update and RAdam: faster on the stochastic
+#: policy, less steady on the deterministic one; RAdam because Adam's first steps after cloning,
+#: with the looser clip, broke the clone (measurements: docs/learning.md#ppo-presets).
 PRESETS: dict[str, PpoSettings] = {
     "authors": PpoSettings(),
     "toolimit": PpoSettings(max_grad_norm=0.5, episodes_per_update=1, optimizer="radam"),

@@ -81,7 +81,7 @@ class LearningConfig:
     Attributes:
         timesteps: PPO environment steps (cloning rollouts come on top). 300,000 suits the planar
             world; the 3D world's preset (:data:`toolimit.pipeline.settings.WORLD_PRESETS`) gives
-            1.5 M (the Panda spade's training success climbs from 0.03 to 1.0 by 1.2 M).
+            1.5 M (docs/learning.md#learning-stage-iv).
         envs: B, instances stepped together.
         preset: PPO settings: the authors' or the project's (a looser gradient clip and RAdam), a
             key of :data:`toolimit.learn.ppo.PRESETS`.
@@ -109,8 +109,7 @@ class LearningConfig:
         reward: sparse (the paper's goal reward) or dense (plus the appendix's shaping: the
             dense-reward baseline); :data:`toolimit.learn.simulator.REWARDS`.
         torch_threads: torch's intra-op threads while learning. One by default: the networks are
-            small, and with two threads on a two-core machine that also simulates, a cloning step
-            of 512 pairs took 176 ms instead of 11 ms (measured, other core busy).
+            small, and a second thread competes with the simulation for the cores.
         adr: domain randomisation of the goal box (spades, :mod:`toolimit.learn.adr`): the box is
             observed, cloned at the aligned position, then moved by the boundary tests.
         adr_every: PPO updates between two boundary tests of ADR.
@@ -126,13 +125,12 @@ class LearningConfig:
             ``keep_best`` is rolled out at the end of a run whose best check is not its last update.
         sim_processes: processes stepping the B instances (3D tasks; the same numbers whatever
             their count, :mod:`toolimit.learn.split_simulator`). One by default: two were slower
-            on the Panda spade while other jobs kept the second core busy (5,294 against 5,853
-            steps/s, benchmarks/learning_throughput.py, load average about 3 on two cores).
+            on a shared machine (benchmarks/learning_throughput.py; docs/results/performance.md).
         sim_threads: threads stepping each process's instances in a scene that takes them (the 3D
             spade's sand; the same numbers whatever their count, tests/scenes/test_sand_threads.py).
             None: :meth:`threads_per_process`, the cores this process may use shared among the
-            ``sim_processes``. Two threads on two otherwise idle cores trained the Panda spade at
-            6,427 against 3,968 steps/s (benchmarks/learning_throughput.py --sim-threads 2).
+            ``sim_processes``: on two idle cores two threads train the 3D spade faster than one
+            (docs/results/performance.md).
     """
 
     timesteps: int = 300_000

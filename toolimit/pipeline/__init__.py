@@ -1,5 +1,5 @@
 """The pipeline as library code: each stage a function of the previous stage's output and its
-typed settings, and :func:`run_pipeline` chaining them with resume.
+typed settings, and :func:`run_pipeline` chaining them with resume::
 
     from toolimit.pipeline import PipelineSettings, run_pipeline
 

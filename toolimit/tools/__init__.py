@@ -1,5 +1,5 @@
-"""Tools: the tool frame and its maths (:mod:`.frame`), one record per tool (:mod:`.record`) in a
-registry every stage reads (:mod:`.registry`), and the built-in tools, one module each.
+"""Tools: the tool frame and its maths (:mod:`toolimit.tools.frame`), one record per tool
+(:mod:`toolimit.tools.record`) in a registry every stage reads (:mod:`toolimit.tools.registry`), and the built-in tools, one module each.
 
 A new tool is one :class:`ToolRecord` passed to :func:`register_tool` (its dimensions, its scene
 per world, optionally its scripted motions, synthetic-demonstration generator and default robots).

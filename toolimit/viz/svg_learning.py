@@ -28,7 +28,7 @@ def learning_curve_svg(
     curves: Mapping[str, str | os.PathLike[str]], metric: str = "success_rate", title: str | None = None
 ) -> str:
     """The SVG text of ``metric`` against PPO env steps for each run: ``curves`` maps a run's
-        label to its ``curve.jsonl``. The axis of the success rate spans [0, 1], that of the goal reward
+    label to its ``curve.jsonl``. The axis of the success rate spans [0, 1], that of the goal reward
     starts at 0."""
     if metric not in METRICS:
         raise ValueError(f"unknown metric {metric!r}; choose one of {', '.join(METRICS)}")

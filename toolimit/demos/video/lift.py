@@ -37,8 +37,8 @@ needs, as wide as a slow motion's noise allows. Frames where an end is not visib
 linear interpolation of the lifted points. The
 per-frame uncertainty is the position change caused by the track error left after smoothing
 (``pixel_noise`` pixels before it) and by the plane distance's uncertainty: it does not include the
-motion's departure from the plane, which is the main error on real motions (README, "Stage (i) from
-a video").
+motion's departure from the plane, which is the main error on real motions
+(docs/results/video_lift.md#video-lift).
 """
 
 from __future__ import annotations
@@ -188,7 +188,7 @@ class LiftedDemo:
 
 def ray_plane_intersection(origin: np.ndarray, rays: np.ndarray, normal: np.ndarray, distance: float) -> np.ndarray:
     """(N, 3) points where the rays ``origin + s * rays`` (origin (3,), rays (N, 3)) meet the plane
-    ``normal . (p - origin) = distance``; NaN for a ray parallel to it or meeting it behind."""
+    ``normal @ (p - origin) = distance``; NaN for a ray parallel to it or meeting it behind."""
     along = rays @ normal
     with np.errstate(divide="ignore", invalid="ignore"):
         scale = np.where(along > 1e-12, distance / along, np.nan)

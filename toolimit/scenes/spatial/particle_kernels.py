@@ -8,13 +8,8 @@ nothing, so :func:`advance` runs each one's sub-steps one after the other (its s
 cache) and :func:`advance_on_threads` shares the instances out among numba's threads: the same
 numbers, bit for bit, whatever their count (``tests/scenes/test_sand_threads.py``).
 
-Where the time goes (Panda spade task, B = 16, 200 spheres, one core): the sphere pairs' Jacobi pass
-about 40 % of a simulated sub-step, the two wall passes 30 % (before their broad phase listed the
-walls near the sand: -12 % of the kernels' time), the tool's per-sphere test 10 %, the Verlet
-lists 5-20 % (20 % while the blade stirs the sand). With the fresh policy of
-``benchmarks/learning_throughput.py`` the blade never reaches the sand, yet 86 % of the kernels'
-time falls in each episode's first 100 steps: the cached heap, settled in a 0.36 m pen, slumps in
-the 0.4 m deposit until about step 100-150, after which island sleeping skips it.
+The wall passes test only the walls near the sand (a broad phase), and island sleeping skips a
+heap at rest; where the time goes is in docs/results/performance.md#where-the-sands-time-goes.
 
 Kernels are compiled on first use and cached on disk (``cache=True``), so only the first import on
 a machine pays the compile time. They keep IEEE arithmetic (no ``fastmath``): with it, the kernels

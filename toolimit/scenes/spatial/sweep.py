@@ -12,13 +12,9 @@ raised :data:`SNATH_ELEVATION`, pulled towards the handle (world -x) over the pa
 :data:`DRAW_MARGIN` beyond each end at :data:`DRAW_SPEED`. The speed rises from rest over a run-up
 of :data:`RAMP` and falls back over as long a run-out, a half cosine each, so that a robot arm can
 follow it: it is the LfD baseline's kinesthetic demonstration (:mod:`toolimit.learn.kinesthetic`).
-Measured with the Panda on the figure's ``scythe_00`` learning task (stage iii's tracking, 10
-replays, seed 0): this draw's replay at real time cuts 9.7 of the 10 stalks on average. Variants,
-each held still 3 steps first: at 1.5 m/s a run-up of 0.25 m cut 3.6, 0.35 m 9.2; at 1.7 m/s with
-0.3 m 3.0 (the arm lags the faster start). The tool alone cuts all 10 at 1.5 m/s (at 1.3 m/s
-8.7-9.0: the approach test is met in fewer sub-steps). The motion this replaced, two pulls across
-the patch's width pushed back in between, held the handle end below the blade (the sign of the
-raise was wrong) and cut nothing in the Panda's replays at any pace from 1 to 5.
+Its speed and run-up are the ones with which the Panda's replay cuts nearly every stalk (a shorter
+run-up or a faster draw leaves the arm lagging); the measurements and the motion this replaced are
+in docs/history.md#scenes.
 """
 
 from __future__ import annotations
