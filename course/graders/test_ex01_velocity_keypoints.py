@@ -16,6 +16,8 @@ from toolimit.demos import ToolDemo
 MODULE = "ex01_velocity_keypoints"
 SEEDS = range(8)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "toolimit.demos", "toolimit.align"]
 FORBIDDEN = ["toolimit.align.keypoints"]
 
 

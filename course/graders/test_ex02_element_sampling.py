@@ -17,6 +17,8 @@ from toolimit.align.sampler import sample_element_positions as reference_sample
 
 MODULE = "ex02_element_sampling"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "scipy.spatial", "toolimit.align"]
 FORBIDDEN = ["toolimit.align.sampler"]
 #: Seconds a single call may take before the grader assumes an endless loop (conftest.py).
 CALL_TIME_LIMIT_S = 20
@@ -41,9 +43,13 @@ def nearest_keypoint(samples: np.ndarray, keypoints: np.ndarray) -> np.ndarray:
 
 
 def draw_singles(sample, n_draws: int, seed: int, weights) -> np.ndarray:
-    """(n_draws, 3) positions from n_draws calls with one element each, one generator for all."""
-    rng = np.random.default_rng(seed)
-    draws = [sample(FAR_KEYPOINTS, 1, COVARIANCE, 0.0, rng, weights=weights) for _ in range(n_draws)]
+    """(n_draws, 3) positions from n_draws calls with one element each, a generator seeded
+    (seed, draw) for each (your function runs in another process: a generator it advances does not
+    come back)."""
+    draws = [
+        sample(FAR_KEYPOINTS, 1, COVARIANCE, 0.0, np.random.default_rng([seed, draw]), weights=weights)
+        for draw in range(n_draws)
+    ]
     if any(draw is None for draw in draws):
         fail(f"rng seed {seed}: returned None for a single element with min_distance 0 (always possible)")
     return np.concatenate([np.asarray(draw, dtype=float).reshape(1, 3) for draw in draws])

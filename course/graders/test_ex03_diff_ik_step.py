@@ -21,6 +21,8 @@ from toolimit.robots import RobotModel, make_robot
 MODULE = "ex03_diff_ik_step"
 #: Existing implementations of this exercise (the library's trajectory optimisation solves the same
 #: QP over a horizon): a submission calling one of them gets 0 (grading.py).
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "scipy.sparse", "osqp", "pinocchio", "toolimit.robots"]
 FORBIDDEN = ["toolimit.trajopt", "toolimit.compare"]
 VELOCITY_TOLERANCE = 1e-4  # rad/s between your answer and the expected one
 CONSTRAINT_TOLERANCE = 1e-6  # rad/s (velocity limits) and rad (position limits)

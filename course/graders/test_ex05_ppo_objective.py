@@ -13,6 +13,8 @@ from stable_baselines3.common.buffers import RolloutBuffer
 MODULE = "ex05_ppo_objective"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
 #: SB3's buffer computes GAE; its PPO.train computes the surrogate.
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "torch", "stable_baselines3"]
 FORBIDDEN = [
     "stable_baselines3.common.buffers.RolloutBuffer.compute_returns_and_advantage",
     "stable_baselines3.common.buffers.DictRolloutBuffer.compute_returns_and_advantage",

@@ -17,6 +17,8 @@ from toolimit.demos.video.lift import ray_plane_intersection as reference_inters
 MODULE = "ex06_ray_plane_lift"
 SEEDS = range(6)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "toolimit.demos.video"]
 FORBIDDEN = ["toolimit.demos.video"]
 
 
