@@ -46,7 +46,7 @@ SUBMISSION_ENV = "TOOLIMIT_SUBMISSION"
 REPORT_ENV = "TOOLIMIT_GRADE_REPORT"
 CALL_LIMIT_ENV = "TOOLIMIT_CALL_TIME_LIMIT"
 #: What the student bundle takes from graders/ (besides test_ex*.py).
-GRADER_SUPPORT = ("conftest.py", "grading.py", "pytest.ini")
+GRADER_SUPPORT = ("conftest.py", "grading.py", "isolation.py", "student_process.py", "pytest.ini")
 #: Lines of STUDENTS.md between these markers are about self-checking (dropped without graders).
 SELF_CHECK_START, SELF_CHECK_END = "<!-- self-check -->", "<!-- /self-check -->"
 

@@ -43,6 +43,7 @@ STARTUP_TIME_S = 120.0
 #: seconds past a call's limit before the grader kills a student's process that did not stop itself
 KILL_MARGIN_S = 10.0
 PROCESSES: list[StudentProcess] = []
+RECEIVED: list[str] = []  # the functions whose values the running test received
 
 keep_memory_private()  # the student's process cannot read this one's memory or environment
 
@@ -179,6 +180,7 @@ class StudentModule:
         reply = self._process.call(name, args, kwargs, gradients)
         status = reply.get("status")
         if status == "ok":
+            RECEIVED.append(name)
             grads = {str(key): decode(value) for key, value in dict(reply.get("gradients") or {}).items()}
             return decode(reply.get("value")), grads
         if status == "forbidden":
@@ -256,6 +258,26 @@ def submission(request) -> Callable[[str], StudentModule]:
             raise type(verdict)(str(verdict)) from None
 
     return load
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_pyfunc_call(pyfuncitem: pytest.Function):
+    """A grader that fails on an odd value of the student's (an exception while checking it, not a
+    check that failed) gives one message saying what was expected (the grader's ``RETURNS``)."""
+    RECEIVED.clear()
+    outcome = yield
+    error = outcome.excinfo[1] if outcome.excinfo else None
+    if error is None or not RECEIVED or isinstance(error, (pytest.fail.Exception, pytest.skip.Exception)):
+        return
+    returns = getattr(pyfuncitem.module, "RETURNS", {})
+    expected = "; ".join(f"`{name}` returns {returns[name]}" for name in dict.fromkeys(RECEIVED) if name in returns)
+    text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    outcome.force_exception(
+        pytest.fail.Exception(
+            f"your value could not be checked ({text}): expected that {expected or 'the stub documents'}",
+            pytrace=False,
+        )
+    )
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:

@@ -73,6 +73,29 @@ UNWATCHABLE = (
 )
 
 
+# --- cases: public (the student's self-check) or hidden (the instructor's seed) ------------------
+#: The instructor's hidden seed (``grade.py --hidden-seed N``); unset, the public cases are graded.
+HIDDEN_SEED_ENV = "TOOLIMIT_HIDDEN_SEED"
+
+
+def case_seeds(count: int, offset: int = 0) -> list[int]:
+    """The seeds of ``count`` cases of one test: ``offset .. offset + count - 1`` (public, what the
+    student's self-check runs), or, with ``$TOOLIMIT_HIDDEN_SEED`` set, ``count`` seeds drawn from
+    it (at least 1000, so never a public one): cases no student has seen."""
+    import os
+
+    hidden = os.environ.get(HIDDEN_SEED_ENV)
+    if not hidden:
+        return list(range(offset, offset + count))
+    rng = np.random.default_rng([int(hidden), offset])
+    seeds: list[int] = []
+    while len(seeds) < count:
+        seed = int(rng.integers(1000, 2**31 - 1))
+        if seed not in seeds:
+            seeds.append(seed)
+    return seeds
+
+
 # --- verdicts: failures that grade.py reads as more than one failed test ------------------------
 class Verdict(pytest.fail.Exception):
     """A failure that decides the whole exercise; ``verdict`` is read by grade.py."""

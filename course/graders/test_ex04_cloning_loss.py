@@ -10,15 +10,17 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from grading import check, fmt
+from grading import case_seeds, check, fmt
 from stable_baselines3.common.policies import ActorCriticPolicy
 
 MODULE = "ex04_cloning_loss"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {"cloning_loss": "a scalar torch tensor (0-d) that requires grad"}
 #: Imported in the student's process before their module (it may start no thread afterwards).
 STUDENT_IMPORTS = ["numpy", "torch", "stable_baselines3"]
 FORBIDDEN = ["toolimit.learn.cloning"]
-SEEDS = range(4)
+SEEDS = case_seeds(4)
 
 
 def make_policy(seed: int, obs_dim: int = 6, act_dim: int = 3) -> ActorCriticPolicy:

@@ -9,14 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from grading import check, fmt, fmt_shape
+from grading import case_seeds, check, fmt, fmt_shape
 
 from toolimit.demos.video import look_at
 from toolimit.demos.video.lift import ray_plane_intersection as reference_intersection
 
 MODULE = "ex06_ray_plane_lift"
-SEEDS = range(6)
+SEEDS = case_seeds(6)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {
+    "pixel_rays": "an (M, 3) float array of unit vectors in the world frame",
+    "ray_plane_intersection": "an (M, 3) float array of points in metres, NaN rows where a ray misses",
+}
 #: Imported in the student's process before their module (it may start no thread afterwards).
 STUDENT_IMPORTS = ["numpy", "toolimit.demos.video"]
 FORBIDDEN = ["toolimit.demos.video"]

@@ -26,6 +26,10 @@ CHEATING = Path(__file__).resolve().parent / "cheating_solutions"
 EXERCISES = sorted(path.stem for path in (COURSE / "exercises").glob("ex*.py"))
 VARIANTS = sorted(path.name for path in WRONG.iterdir() if path.is_dir() and path.name.startswith("ex"))
 CHEATS = sorted(path.name for path in CHEATING.iterdir() if path.is_dir() and path.name.startswith("ex"))
+#: Submissions that attack the grader rather than call a library: read its frames, patch its checks,
+#: start a raw thread, run the library's source again. Each must score at most a quarter.
+ATTACKING = Path(__file__).resolve().parent / "attacking_solutions"
+ATTACKS = sorted(path.name for path in ATTACKING.iterdir() if path.is_dir() and path.name.startswith("ex"))
 HONEST = Path(__file__).resolve().parent / "honest_solutions"
 HONEST_VARIANTS = sorted(path.name for path in HONEST.iterdir() if path.is_dir() and path.name.startswith("ex"))
 #: A loop the grader's per-call time limit cannot interrupt (it swallows every exception): only the
@@ -104,6 +108,9 @@ def grades(tmp_path_factory) -> dict:
         for variant in HONEST_VARIANTS:
             if wrong_solution_file(variant, HONEST).stem == exercise:
                 (wrong / variant).symlink_to(HONEST / variant)
+        for variant in ATTACKS:
+            if wrong_solution_file(variant, ATTACKING).stem == exercise:
+                (wrong / variant).symlink_to(ATTACKING / variant)
         runs.append((wrong, ("--exercise", exercise)))
     loops = folder / "loops"
     for name, source in (("loops_stubbornly", STUBBORN_LOOP), ("loops_plainly", PLAIN_LOOP)):
@@ -194,6 +201,14 @@ def test_cheating_solution_scores_zero_with_a_message(grades, variant):
     assert result["status"] == "forbidden" and result["passed"] == 0, (result["status"], result["tests"])
     forbidden = [message for message in result["messages"].values() if message.startswith("0 points for this exercise")]
     assert forbidden and "existing implementation" in forbidden[0], result["messages"]
+
+
+@pytest.mark.parametrize("variant", ATTACKS)
+def test_attack_on_the_grader_scores_at_most_a_quarter(grades, variant):
+    exercise = wrong_solution_file(variant, ATTACKING).stem
+    result = grades[variant][exercise]
+    assert result["total"] > 0 and result["passed"] <= result["total"] / 4, (result["status"], result["tests"])
+    assert result["score"] <= 0.25 * result["max_score"], result
 
 
 @pytest.mark.parametrize("variant", HONEST_VARIANTS)
