@@ -16,8 +16,16 @@ from toolimit.demos import ToolDemo
 MODULE = "ex01_velocity_keypoints"
 SEEDS = case_seeds(8)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex01_output_is_sorted_unique_int_frames": 2,
+    "test_ex01_first_and_last_frame_are_keypoints": 2,
+    "test_ex01_keypoints_match_reference": 6,
+}
 #: What each function returns, for the message on a value the checks cannot read.
-RETURNS = {"velocity_keypoints": "a 1-D integer array of frame indices in 0..T-1, sorted, first and last frame included"}
+RETURNS = {
+    "velocity_keypoints": "a 1-D integer array of frame indices in 0..T-1, sorted, first and last frame included"
+}
 #: Imported in the student's process before their module (it may start no thread afterwards).
 STUDENT_IMPORTS = ["numpy", "toolimit.demos", "toolimit.align"]
 FORBIDDEN = ["toolimit.align.keypoints"]

@@ -17,6 +17,18 @@ from toolimit.align.sampler import sample_element_positions as reference_sample
 
 MODULE = "ex02_element_sampling"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex02_minimum_distance_matches_reference": 2,
+    "test_ex02_sample_shape_and_dtype": 1,
+    "test_ex02_elements_respect_min_distance": 1.5,
+    "test_ex02_on_ground_elements_have_zero_height": 0.5,
+    "test_ex02_returns_none_when_impossible": 0.5,
+    "test_ex02_same_generator_state_gives_same_positions": 0.5,
+    "test_ex02_mixture_statistics": 2,
+    "test_ex02_each_element_picks_its_own_keypoint": 1,
+    "test_ex02_planar_covariance_keeps_the_plane": 1,
+}
 #: What each function returns, for the message on a value the checks cannot read.
 RETURNS = {
     "minimum_element_distance": "a float, metres",

@@ -15,6 +15,13 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 
 MODULE = "ex04_cloning_loss"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex04_loss_matches_the_mean_squared_error": 4,
+    "test_ex04_loss_is_deterministic": 1,
+    "test_ex04_gradient_reaches_the_actor_and_not_the_std": 2,
+    "test_ex04_optimising_the_loss_fits_a_linear_expert": 3,
+}
 #: What each function returns, for the message on a value the checks cannot read.
 RETURNS = {"cloning_loss": "a scalar torch tensor (0-d) that requires grad"}
 #: Imported in the student's process before their module (it may start no thread afterwards).

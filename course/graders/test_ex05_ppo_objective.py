@@ -13,6 +13,13 @@ from stable_baselines3.common.buffers import RolloutBuffer
 MODULE = "ex05_ppo_objective"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
 #: SB3's buffer computes GAE; its PPO.train computes the surrogate.
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex05_gae_matches_stable_baselines3": 4,
+    "test_ex05_gae_special_cases": 2,
+    "test_ex05_surrogate_matches_stable_baselines3": 3,
+    "test_ex05_surrogate_hand_case": 1,
+}
 #: What each function returns, for the message on a value the checks cannot read.
 RETURNS = {
     "generalized_advantage_estimation": "a tuple (advantages, returns) of two arrays shaped like rewards",
