@@ -52,6 +52,12 @@ CALL_LIMIT_ENV = "TOOLIMIT_CALL_TIME_LIMIT"
 HIDDEN_SEED_ENV = "TOOLIMIT_HIDDEN_SEED"
 #: What the student bundle takes from graders/ (besides test_ex*.py).
 GRADER_SUPPORT = ("conftest.py", "grading.py", "isolation.py", "student_process.py", "pytest.ini")
+#: The notebooks whose exercise cells the bundle carries (solutions stripped) and the data they read.
+NOTEBOOKS = COURSE.parent / "notebooks"
+NOTEBOOK_DATA = COURSE.parent / "data" / "demos"
+#: A solution inside a notebook's code cell: the lines between these markers (nbgrader's syntax),
+#: replaced in the bundle by one line raising NotImplementedError.
+SOLUTION_START, SOLUTION_END = "### BEGIN SOLUTION", "### END SOLUTION"
 #: Lines of STUDENTS.md between these markers are about self-checking (dropped without graders).
 SELF_CHECK_START, SELF_CHECK_END = "<!-- self-check -->", "<!-- /self-check -->"
 
@@ -443,8 +449,9 @@ def check_report(grades: dict[str, ExerciseGrade], show: int | None = 3) -> str:
     for exercise, grade in grades.items():
         status = grade["status"]
         if status == "graded":
-            verdict = f"{grade['passed']}/{grade['total']} tests passed" + (
-                f" in {grade['seconds']:.0f} s" if grade["seconds"] >= 10 else ""
+            verdict = (
+                f"{grade['score']:g}/{grade['max_score']:g} points, {grade['passed']}/{grade['total']} tests passed"
+                + (f" in {grade['seconds']:.0f} s" if grade["seconds"] >= 10 else "")
             )
         elif status in ("forbidden", "timed out"):
             verdict = f"0 points ({status}): {headline(grade)}"
@@ -606,9 +613,54 @@ def student_readme(with_graders: bool) -> str:
     return "".join(kept)
 
 
-def write_bundle(out: Path, with_graders: bool = True) -> list[Path]:
-    """Write what a student receives into ``out`` (new or empty): exercises/, README.md and, with
-    graders, graders/ and grade.py for self-checking. Never a solution. The files written."""
+def strip_solutions(source: str) -> str:
+    """A code cell's source with each marked solution replaced by ``raise NotImplementedError``
+    (at the start marker's indentation); ValueError for a start marker without its end."""
+    kept: list[str] = []
+    inside = False
+    for line in source.splitlines(keepends=True):
+        if line.strip() == SOLUTION_START:
+            indent = line[: len(line) - len(line.lstrip())]
+            kept.append(f'{indent}raise NotImplementedError("exercise: write this part")\n')
+            inside = True
+        elif line.strip() == SOLUTION_END:
+            inside = False
+        elif not inside:
+            kept.append(line)
+    if inside:
+        raise ValueError(f"a {SOLUTION_START!r} without its {SOLUTION_END!r}")
+    return "".join(kept)
+
+
+def student_notebook(path: Path) -> str:
+    """The notebook as a student receives it: marked solutions stripped, no outputs (JSON text)."""
+    notebook = json.loads(path.read_text(encoding="utf-8"))
+    for cell in notebook["cells"]:
+        if cell["cell_type"] != "code":
+            continue
+        source = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        try:
+            stripped = strip_solutions(source)
+        except ValueError as error:
+            raise RuntimeError(f"{path.name}: {error}") from None
+        cell["source"] = stripped.splitlines(keepends=True)
+        cell["outputs"], cell["execution_count"] = [], None
+    return json.dumps(notebook, indent=1, ensure_ascii=False) + "\n"
+
+
+def exercise_notebooks() -> list[Path]:
+    """The project's notebooks that hold a marked solution (the course's notebook exercises)."""
+    if not NOTEBOOKS.is_dir():
+        return []
+    return [path for path in sorted(NOTEBOOKS.glob("*.ipynb")) if SOLUTION_START in path.read_text(encoding="utf-8")]
+
+
+def write_bundle(out: Path, with_graders: bool = True, wheel: Path | None = None) -> list[Path]:
+    """Write what a student receives into ``out`` (new or empty): exercises/, README.md, toolimit's
+    wheel and requirements.txt (``pip install -r requirements.txt``: torch, toolimit and the
+    ``course`` extra, pytest among it) and, with graders, graders/ and grade.py for self-checking,
+    and the exercise notebooks (solutions stripped) with notebook_checks.py and data/demos.
+    Never a solution; written beside ``out`` and renamed, so never half a bundle. The files written."""
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise FileExistsError(f"{out} exists and is not an empty folder")
     sources = [(path, Path("exercises") / path.name) for path in sorted(EXERCISES.glob("ex*.py"))]
@@ -617,23 +669,44 @@ def write_bundle(out: Path, with_graders: bool = True) -> list[Path]:
         sources += [(path, Path("graders") / path.name) for path in sorted(GRADERS.glob("test_ex*.py"))]
         sources.append((Path(__file__).resolve(), Path("grade.py")))
     solutions = {path.read_bytes() for path in SOLUTIONS.glob("*.py")} if SOLUTIONS.is_dir() else set()
-    written = []
-    for source, relative in sources:
-        if source.read_bytes() in solutions or "solutions" in relative.parts:
-            raise RuntimeError(f"refusing to bundle {source}: it is a reference solution")
-        target = out / relative
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(source, target)
-        written.append(target)
-    (out / "README.md").write_text(student_readme(with_graders), encoding="utf-8")
-    written.append(out / "README.md")
-    return written
+    partial = out.with_name(out.name + ".partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    partial.mkdir(parents=True)
+    try:
+        for source, relative in sources:
+            if source.read_bytes() in solutions or "solutions" in relative.parts:
+                raise RuntimeError(f"refusing to bundle {source}: it is a reference solution")
+            target = partial / relative
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, target)
+        notebooks = exercise_notebooks() if with_graders else []  # an exam's bundle: no instant feedback
+        for path in notebooks:
+            (partial / "notebooks").mkdir(exist_ok=True)
+            (partial / "notebooks" / path.name).write_text(student_notebook(path), encoding="utf-8")
+        if notebooks:  # their checks (exercise 03's reads its grader's reference QP) and the data they read
+            shutil.copy2(COURSE / "notebook_checks.py", partial / "notebook_checks.py")
+            shutil.copytree(NOTEBOOK_DATA, partial / "data" / "demos")
+        wheel = build_wheel(partial) if wheel is None else Path(shutil.copy2(wheel, partial / wheel.name))
+        (partial / "requirements.txt").write_text(
+            "# pip install -r requirements.txt (from this folder): torch's CPU build first, then toolimit and\n"
+            "# what the course needs (pytest, jupyterlab)\n"
+            f"torch==2.13.0\n./{wheel.name}[course]\n",
+            encoding="utf-8",
+        )
+        (partial / "README.md").write_text(student_readme(with_graders), encoding="utf-8")
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
+    if out.exists():
+        out.rmdir()
+    partial.rename(out)
+    return sorted(path for path in out.rglob("*") if path.is_file())
 
 
 def bundle(args: argparse.Namespace) -> int:
     try:
-        written = write_bundle(args.out, not args.without_graders)
-    except (FileExistsError, RuntimeError) as error:
+        written = write_bundle(args.out, not args.without_graders, args.wheel)
+    except (FileExistsError, FileNotFoundError, RuntimeError, subprocess.CalledProcessError) as error:
         print(f"grade bundle: error: {error}", file=sys.stderr)
         return 2
     print(f"wrote {len(written)} files to {args.out} (no solutions):")
@@ -683,7 +756,8 @@ def main(argv: list[str] | None = None) -> int:
     if argv[:1] == ["bundle"]:
         parser = argparse.ArgumentParser(prog="grade.py bundle", description="Write the student bundle.")
         parser.add_argument("out", type=Path, help="a new (or empty) folder")
-        parser.add_argument("--without-graders", action="store_true", help="exercises and README only (exams)")
+        parser.add_argument("--without-graders", action="store_true", help="no graders, no self-check (exams)")
+        parser.add_argument("--wheel", type=Path, help="toolimit's wheel to include (default: built from the project)")
         return bundle(parser.parse_args(argv[1:]))
     if argv[:1] == ["gradescope"]:
         parser = argparse.ArgumentParser(prog="grade.py gradescope", description="Grade one submission for Gradescope.")

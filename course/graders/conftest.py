@@ -216,7 +216,6 @@ def call_time_limit(grader: ModuleType | None) -> float:
     return float(getattr(grader, "CALL_TIME_LIMIT_S", DEFAULT_CALL_TIME_LIMIT_S))
 
 
-@functools.cache
 def load_submission(
     module_name: str,
     forbidden_names: tuple[str, ...] = (),
@@ -225,20 +224,31 @@ def load_submission(
     preload: tuple[str, ...] = (),
 ) -> StudentModule:
     """Start the student's process for ``<folder>/<module_name>.py`` (imported there under the guard,
-    its source read for forbidden names)."""
+    its source read for forbidden names), once per session: a file that does not import fails every
+    test with the same verdict without starting it again."""
+    outcome = _started(module_name, forbidden_names, time_limit, hint, preload)
+    if isinstance(outcome, Exception):
+        raise type(outcome)(str(outcome))
+    return outcome
+
+
+@functools.cache
+def _started(
+    module_name: str, forbidden_names: tuple[str, ...], time_limit: float, hint: str, preload: tuple[str, ...]
+) -> StudentModule | MissingFile | ImportFailed | TooSlow:
     folder = submission_folder()
     path = folder / f"{module_name}.py"
     if not path.is_file():
-        raise MissingFile(f"no file {module_name}.py in the submission folder {folder} (set ${SUBMISSION_ENV})")
+        return MissingFile(f"no file {module_name}.py in the submission folder {folder} (set ${SUBMISSION_ENV})")
     process = StudentProcess(path.resolve(), forbidden_names, preload, time_limit)
     PROCESSES.append(process)
     status = process.start()
-    if status.get("status") in ("import_error",):
-        raise ImportFailed(str(status["message"]))
+    if status.get("status") == "import_error":
+        return ImportFailed(str(status["message"]))
     if status.get("status") in ("too_slow", "killed_too_slow"):
-        raise TooSlow(str(status.get("message") or f"importing {path.name} did not finish in time"))
+        return TooSlow(str(status.get("message") or f"importing {path.name} did not finish in time"))
     if status.get("status") == "ended":
-        raise ImportFailed(f"importing {path.name} ended its process (exit code {status.get('code')})")
+        return ImportFailed(f"importing {path.name} ended its process (exit code {status.get('code')})")
     return StudentModule(process, hint)
 
 

@@ -268,7 +268,9 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     files = {path.relative_to(out).as_posix() for path in out.rglob("*") if path.is_file()}
-    assert {"README.md", "grade.py", "graders/conftest.py", "graders/grading.py"} <= files
+    assert {"README.md", "grade.py", "graders/conftest.py", "graders/grading.py", "requirements.txt"} <= files
+    (wheel,) = out.glob("toolimit-*.whl")
+    assert f"./{wheel.name}[course]" in (out / "requirements.txt").read_text()
     assert {f"exercises/{exercise}.py" for exercise in EXERCISES} <= files
     assert {f"graders/test_{exercise}.py" for exercise in EXERCISES} <= files
     solutions = {path.read_bytes() for path in (COURSE / "solutions").glob("*.py")}
@@ -295,7 +297,7 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
     assert check.stdout.split() == ["ex05_ppo_objective", "not", "attempted"], check.stdout
     bare = tmp_path / "exam"
     result = subprocess.run(
-        [sys.executable, str(COURSE / "grade.py"), "bundle", str(bare), "--without-graders"],
+        [sys.executable, str(COURSE / "grade.py"), "bundle", str(bare), "--without-graders", "--wheel", str(wheel)],
         cwd=REPO,
         capture_output=True,
         text=True,
@@ -303,5 +305,5 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
         check=False,
     )
     assert result.returncode == 0, result.stderr
-    assert sorted(path.name for path in bare.iterdir()) == ["README.md", "exercises"]
+    assert sorted(path.name for path in bare.iterdir()) == ["README.md", "exercises", "requirements.txt", wheel.name]
     assert "grade.py check" not in (bare / "README.md").read_text()

@@ -86,7 +86,9 @@ def test_a_public_case_lookup_table_passes_public_cases_and_fails_hidden_ones(lo
 def test_weights_name_every_test_group_of_their_grader():
     for grader in sorted(GRADERS.glob("test_ex*.py")):
         tree = ast.parse(grader.read_text())
-        groups = {node.name for node in tree.body if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}
+        groups = {
+            node.name for node in tree.body if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")
+        }
         weights = next(
             ast.literal_eval(node.value)
             for node in tree.body
