@@ -389,6 +389,7 @@ def check_spade_success(student: Callable[..., Any], seed: int = 0) -> bool:
     cases = []
     if problem is not None:
         cases.append((False, problem))
+        got = None
     else:
         got = got.astype(bool)
         for b in range(episodes):

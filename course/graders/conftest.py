@@ -227,7 +227,7 @@ def load_submission(
     its source read for forbidden names), once per session: a file that does not import fails every
     test with the same verdict without starting it again."""
     outcome = _started(module_name, forbidden_names, time_limit, hint, preload)
-    if isinstance(outcome, Exception):
+    if isinstance(outcome, BaseException):
         raise type(outcome)(str(outcome))
     return outcome
 
