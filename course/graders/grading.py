@@ -35,6 +35,9 @@ import pytest
 COURSE = Path(__file__).resolve().parents[1]
 GRADERS = COURSE / "graders"
 SOLUTIONS = COURSE / "solutions"
+#: How a message names the course's own code (solutions, graders): refused by file, never by
+#: fingerprint (a student may write a short function as the reference solution does).
+COURSE_CODE = ("the course's reference solutions", "the course's graders")
 #: The graders' folder's files that run around the student's code (not references of an exercise).
 GRADING_MACHINERY = ("conftest.py", "grading.py", "isolation.py", "student_process.py")
 
@@ -287,7 +290,7 @@ class Forbidden:
             if "." in qualified and not isinstance(target, type):  # a method: also refused as x.method
                 self.attributes[qualified.rsplit(".", 1)[-1]] = name
         # the course's own reference code, whatever the exercise
-        for folder, what in ((SOLUTIONS, "the course's reference solutions"), (GRADERS, "the course's graders")):
+        for folder, what in zip((SOLUTIONS, GRADERS), COURSE_CODE):
             if folder.is_dir():
                 self.names[f"course.{folder.name}"] = what
                 for path in folder.glob("*.py"):
@@ -305,10 +308,12 @@ class Forbidden:
         self.fingerprints = self._fingerprints()
 
     def _fingerprints(self) -> dict[tuple, str]:
-        """The fingerprint of every function compiled from a forbidden file: the same source run
+        """The fingerprint of every function compiled from a forbidden library file: the same source run
         again (``exec(inspect.getsource(...))``, a copy saved under another name) has the same one."""
         prints: dict[tuple, str] = {}
         for location, what in self.files.items():
+            if what in COURSE_CODE:  # a student's own code may read like a short reference solution
+                continue
             paths = sorted(location.rglob("*.py")) if location.is_dir() else [location]
             for path in paths:
                 try:
