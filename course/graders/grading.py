@@ -168,9 +168,13 @@ def fmt(value: Any, digits: int = 5, limit: int = 10) -> str:
             return str(number)
         text = f"{number:.{digits}g}"
         return "0" if text == "-0" else text
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except Exception:  # noqa: BLE001 - any object: named by its type
+        return f"a {type(value).__name__}"
     if array.ndim == 0:
-        return fmt(array.item(), digits, limit)
+        item = array.item()
+        return f"a {type(value).__name__}" if item is value else fmt(item, digits, limit)
     if array.dtype == object:
         return "[" + ", ".join(fmt(item, digits, limit) for item in value) + "]"
     items = list(array)

@@ -11,7 +11,8 @@ Both directions are framed messages on pipes: 8 bytes of length, then the payloa
   only the student's process unpickles, and what it receives comes from the grader.
 - student -> grader: JSON built by :func:`encode` (numbers, strings, lists, tuples, dicts, numpy
   arrays and tensors as raw bytes with their dtype and shape). The grader never unpickles or
-  imports anything from the student: :func:`decode` builds plain numbers and arrays, and any other
+  imports anything from the student: :func:`decode` builds plain numbers and arrays (and scipy's
+  sparse matrices from their three arrays), and any other
   object arrives as an :class:`Opaque` naming its type, so a grader's message can say what came.
 
 Linux x86-64 only, :func:`forbid_threads_and_processes` installs a seccomp filter in the student's
@@ -143,6 +144,16 @@ def encode(value: Any, depth: int = 0) -> Any:
     if torch is not None and isinstance(value, torch.Tensor):
         array = value.detach().cpu().numpy()
         return _array("tensor", array, requires_grad=bool(value.requires_grad))
+    sparse = sys.modules.get("scipy.sparse")
+    if sparse is not None and sparse.issparse(value) and value.dtype.kind in NUMERIC_KINDS:
+        matrix = value.tocsc()
+        return {
+            "t": "sparse",
+            "shape": list(matrix.shape),
+            "data": _array("ndarray", matrix.data),
+            "indices": _array("ndarray", matrix.indices),
+            "indptr": _array("ndarray", matrix.indptr),
+        }
     return {"t": "opaque", "type": _type_name(value), "text": _short_text(value)}
 
 
@@ -183,9 +194,14 @@ def decode(data: Any) -> Any:
             if torch is None:
                 return array
             return torch.from_numpy(array)
+        if tag == "sparse":
+            from scipy import sparse
+
+            parts = [_decode_array(data[key]) for key in ("data", "indices", "indptr")]
+            return sparse.csc_matrix(tuple(parts), shape=tuple(int(n) for n in data["shape"]))
         if tag == "opaque":
             return Opaque(str(data.get("type", "object"))[:200], str(data.get("text", ""))[:200])
-    except (KeyError, TypeError, ValueError) as error:
+    except (KeyError, TypeError, ValueError, IndexError) as error:
         return Opaque(f"value the grader could not read ({error})", "")
     return Opaque("value the grader could not read", "")
 

@@ -1,6 +1,7 @@
 """Cheats: the success rule from the scenes' own SuccessTracker (the rest written honestly)."""
 
 import numpy as np
+
 from toolimit.scenes.base import SuccessTracker
 
 
