@@ -18,9 +18,9 @@ SEEDS = case_seeds(8)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
 #: Points of each test group (all its cases share them): 10 for the exercise.
 WEIGHTS = {
-    "test_ex01_output_is_sorted_unique_int_frames": 2,
+    "test_ex01_output_is_sorted_unique_int_frames": 1.5,
     "test_ex01_first_and_last_frame_are_keypoints": 2,
-    "test_ex01_keypoints_match_reference": 6,
+    "test_ex01_keypoints_match_reference": 6.5,
 }
 #: What each function returns, for the message on a value the checks cannot read.
 RETURNS = {

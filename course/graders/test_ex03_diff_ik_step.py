@@ -23,11 +23,11 @@ MODULE = "ex03_diff_ik_step"
 #: QP over a horizon): a submission calling one of them gets 0 (grading.py).
 #: Points of each test group (all its cases share them): 10 for the exercise.
 WEIGHTS = {
-    "test_ex03_matches_reference_small_steps": 3,
-    "test_ex03_matches_reference_at_velocity_limits": 2,
-    "test_ex03_matches_reference_at_position_limits": 2,
-    "test_ex03_respects_the_limits": 2,
-    "test_ex03_zero_error_gives_zero_velocity": 1,
+    "test_ex03_matches_reference_small_steps": 3.5,
+    "test_ex03_matches_reference_at_velocity_limits": 2.5,
+    "test_ex03_matches_reference_at_position_limits": 2.5,
+    "test_ex03_respects_the_limits": 1,
+    "test_ex03_zero_error_gives_zero_velocity": 0.5,
 }
 #: What each function returns, for the message on a value the checks cannot read.
 RETURNS = {"diff_ik_step": "a (N,) float array, the joint velocities in rad/s"}
