@@ -1,12 +1,16 @@
-"""Grade course submissions: one pytest run of an exercise's grader per student and exercise.
+"""Grade course submissions: one pytest run of an exercise's grader per student and exercise, the
+student's code in a process of its own (graders/isolation.py).
 
 Usage (paths relative to where you run it; ``course/grade.py`` in the repository, ``grade.py`` in a
 student bundle)::
 
-    python course/grade.py SUBMISSIONS_DIR [--out grades.json] [--exercise ex01_velocity_keypoints]
-                           [-k EXPRESSION] [--jobs 2] [--timeout 120] [--call-timeout 20]
+    python course/grade.py SUBMISSIONS_DIR [--out grades.json] [--csv grades.csv] [--gradescope DIR]
+                           [--hidden-seed N] [--weights weights.json] [--exercise ex01] [-k EXPRESSION]
+                           [--jobs 2] [--timeout 120] [--call-timeout 20]
     python course/grade.py check [FOLDER] [--exercise ex01] [--all]     # a student checks their own work
-    python course/grade.py bundle OUT [--without-graders]               # what a student receives
+    python course/grade.py bundle OUT [--without-graders] [--wheel W]   # what a student receives
+    python course/grade.py gradescope SUBMISSION --out results.json     # one submission (run_autograder)
+    python course/grade.py autograder autograder.zip [--hidden-seed N]  # Gradescope's autograder zip
 
 ``SUBMISSIONS_DIR`` holds one folder per student, each with that student's ``exNN_name.py``
 files. Every (student, exercise) pair is graded in a separate process with its own time limit
@@ -14,13 +18,14 @@ files. Every (student, exercise) pair is graded in a separate process with its o
 each call of the student's function has ``--call-timeout`` seconds (default 20); after one ran out,
 the exercise's remaining tests fail at once. A missing file is reported without starting pytest.
 
-Each exercise gets a status: ``graded`` (passed/total tests), ``not attempted`` (the untouched stub),
-``missing`` (no file), ``does not import``, ``timed out`` (0 points), or ``forbidden`` (0 points: the
-submission calls an existing implementation of what it is asked to write; see
-``graders/grading.py``). The table printed at the end gives one cell per student and exercise;
-``--out`` writes, per student and exercise, the status, the counts, the seconds taken, every test's
-outcome and the failure messages as JSON. ``--exercise`` (repeatable; ``ex01`` is enough) grades only
-the named exercises.
+Each exercise gets a status: ``graded``, ``not attempted`` (the untouched stub), ``missing`` (no
+file), ``does not import``, ``timed out`` (0 points), or ``forbidden`` (0 points: the submission
+calls an existing implementation of what it is asked to write; see ``graders/grading.py``), and
+points: each test group (a test function and its cases) is worth its grader's ``WEIGHTS`` (or
+``--weights``), shared by its cases. ``--hidden-seed`` grades on cases drawn from the instructor's
+seed instead of the public ones. The table printed at the end gives one cell per student and
+exercise; ``--out`` writes every test's outcome, the messages and the points as JSON, ``--csv`` one
+row per student, ``--gradescope`` Gradescope's ``results.json`` per student.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ import csv
 import io
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -613,6 +619,15 @@ def student_readme(with_graders: bool) -> str:
     return "".join(kept)
 
 
+#: The exercises' sentence pointing at the self-check, dropped from an exam bundle (no grade.py there).
+SELF_CHECK_SENTENCE = re.compile(r"Check your work with ``python grade\.py check.*?see README\.md\. ", re.DOTALL)
+
+
+def exam_exercise(text: str) -> str:
+    """An exercise file for a bundle without graders: the pointer to the self-check removed."""
+    return SELF_CHECK_SENTENCE.sub("", text, count=1)
+
+
 def strip_solutions(source: str) -> str:
     """A code cell's source with each marked solution replaced by ``raise NotImplementedError``
     (at the start marker's indentation); ValueError for a start marker without its end."""
@@ -679,6 +694,8 @@ def write_bundle(out: Path, with_graders: bool = True, wheel: Path | None = None
             target = partial / relative
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(source, target)
+            if not with_graders and relative.parts[0] == "exercises":
+                target.write_text(exam_exercise(source.read_text(encoding="utf-8")), encoding="utf-8")
         notebooks = exercise_notebooks() if with_graders else []  # an exam's bundle: no instant feedback
         for path in notebooks:
             (partial / "notebooks").mkdir(exist_ok=True)

@@ -340,3 +340,5 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
     assert result.returncode == 0, result.stderr
     assert sorted(path.name for path in bare.iterdir()) == ["README.md", "exercises", "requirements.txt", wheel.name]
     assert "grade.py check" not in (bare / "README.md").read_text()
+    assert not any("grade.py" in path.read_text() for path in (bare / "exercises").glob("ex*.py"))
+    assert all("scores 0 for the exercise" in path.read_text() for path in (bare / "exercises").glob("ex*.py"))
