@@ -1,17 +1,22 @@
-"""The grading fixture: import a student's exercise module from the chosen submission folder.
+"""The grading fixture: the student's exercise module, run in a process of its own.
 
 The folder is ``$TOOLIMIT_SUBMISSION`` (a path, relative to the current directory or absolute);
 without it, the stubs in ``course/exercises``. Every grader asks for its module with
-``submission("exNN_name")`` and calls the functions on it; the returned object turns the usual
-student mistakes (missing file, syntax error, function not written yet, an exception, a call that
-never returns) into one readable failure, and refuses a submission that calls an existing
-implementation of its exercise (the grader's ``FORBIDDEN`` list, plus the course's solutions and
-graders; see ``grading.py``).
+``submission("exNN_name")`` and calls the functions on it: each call sends the inputs to the
+student's process (``student_process.py``) and returns the outputs it sent back, decoded as plain
+values (``isolation.py``), so the student's code never runs in this process. The returned object
+turns the usual student mistakes (missing file, syntax error, function not written yet, an
+exception, a call that never returns, a crash) into one readable failure, and refuses a submission
+that calls an existing implementation of its exercise (the grader's ``FORBIDDEN`` list, plus the
+course's solutions and graders; the guard runs in the student's process, see ``grading.py``). A
+grader's own error on a value it received becomes one message naming what the function returns
+(the grader's ``RETURNS``).
 
 Each student call runs under a time limit (``$TOOLIMIT_CALL_TIME_LIMIT`` seconds, default 20, or
-the grader's ``CALL_TIME_LIMIT_S``); after one call ran out of time, the exercise's later calls fail
-at once. With ``$TOOLIMIT_GRADE_REPORT`` set, every test's outcome is appended to that file as a
-JSON line (``course/grade.py`` reads it).
+the grader's ``CALL_TIME_LIMIT_S``): the student's process stops it, or is killed
+``KILL_MARGIN_S`` later; after one call ran out of time, the exercise's later calls fail at once.
+With ``$TOOLIMIT_GRADE_REPORT`` set, every test's outcome is appended to that file as a JSON line
+(``course/grade.py`` reads it).
 """
 
 from __future__ import annotations

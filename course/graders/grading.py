@@ -11,8 +11,13 @@ and graders are forbidden for every exercise. A name may be a module or package 
 a class (its methods) or a function. :func:`static_violations` reads the submission's source
 (imports, attribute accesses, ``getattr``/``import_module`` with constant strings) and
 :class:`Guard` watches every Python call made while the student's code runs (``sys.setprofile``):
-a forbidden function that starts, by whatever name or path it was reached, ends the exercise with
-0 points and a message saying so.
+a forbidden function that starts, by whatever name or path it was reached (or its source run again,
+recognised by its compiled fingerprint), or a thread that starts, ends the exercise with 0 points and
+a message saying so. The guard runs in the student's process (``student_process.py``): it is the
+honest student's feedback; what protects the score is that process's boundary (``isolation.py``).
+
+Cases: :func:`case_seeds` gives a test its seeds, the public ones or, with the instructor's hidden
+seed, cases no student has seen.
 """
 
 from __future__ import annotations
