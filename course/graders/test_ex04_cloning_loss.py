@@ -77,6 +77,10 @@ def test_ex04_loss_is_deterministic(submission, seed):
     first = submission(MODULE).cloning_loss(policy, observations, actions)
     second = submission(MODULE).cloning_loss(policy, observations, actions)
     check(
+        isinstance(first, torch.Tensor) and isinstance(second, torch.Tensor),
+        lambda: f"seed {seed}: expected a scalar tensor, got {fmt(first)}",
+    )
+    check(
         torch.equal(first, second),
         lambda: (
             f"seed {seed}: two calls on the same policy and data gave {fmt(first, 6)} and {fmt(second, 6)}: "
