@@ -119,14 +119,21 @@ def test_csv_gradescope_results_and_weights(lookup_class, tmp_path):
     assert result.returncode == 0, result.stderr
     rows = list(csv.DictReader(io.StringIO((tmp_path / "grades.csv").read_text())))
     assert [row["student"] for row in rows] == ["reference", "table"]
-    assert rows[0]["ex01_velocity_keypoints"] == rows[0]["total"] == rows[0]["max_total"] == "20"
+    sys.path.insert(0, str(COURSE))
+    try:
+        import grade as grade_module
+    finally:
+        sys.path.remove(str(COURSE))
+    weighted = {**grade_module.grader_weights("ex01_velocity_keypoints"), "test_ex01_keypoints_match_reference": 16}
+    full = f"{sum(weighted.values()):g}"
+    assert full != "10" and rows[0]["ex01_velocity_keypoints"] == rows[0]["total"] == rows[0]["max_total"] == full
     assert float(rows[1]["total"]) < 10
     for student in ("reference", "table"):
         results = json.loads((gradescope / student / "results.json").read_text())
         jsonschema.validate(results, SCHEMA)
         assert results["score"] == pytest.approx(sum(test["score"] for test in results["tests"]))
     reference = json.loads((gradescope / "reference" / "results.json").read_text())
-    assert reference["score"] == 20 and all(test["status"] == "passed" for test in reference["tests"])
+    assert f"{reference['score']:g}" == full and all(test["status"] == "passed" for test in reference["tests"])
     table = json.loads((gradescope / "table" / "results.json").read_text())
     failed = [test for test in table["tests"] if test["status"] == "failed"]
     assert failed and all("expected keypoints" in test["output"] for test in failed if "match" in test["name"])
