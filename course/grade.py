@@ -64,6 +64,9 @@ NOTEBOOK_DATA = COURSE.parent / "data" / "demos"
 #: A solution inside a notebook's code cell: the lines between these markers (nbgrader's syntax),
 #: replaced in the bundle by one line raising NotImplementedError.
 SOLUTION_START, SOLUTION_END = "### BEGIN SOLUTION", "### END SOLUTION"
+#: Lines of a failure message kept (grades.json) and shown (the self-check): the graders keep theirs
+#: shorter, so the line that explains the failure is never cut.
+MESSAGE_LINES = 12
 #: Lines of STUDENTS.md between these markers are about self-checking (dropped without graders).
 SELF_CHECK_START, SELF_CHECK_END = "<!-- self-check -->", "<!-- /self-check -->"
 
@@ -185,7 +188,7 @@ def collect(records: list[dict]) -> tuple[dict[str, str], dict[str, str], dict[s
         elif outcome == "skipped":
             tests.setdefault(name, "skipped")
         if outcome == "failed" and name not in messages:
-            messages[name] = "\n".join(record.get("message", "").strip().splitlines()[:12])
+            messages[name] = "\n".join(record.get("message", "").strip().splitlines()[:MESSAGE_LINES])
             verdicts[name] = record.get("verdict") or "failed"
     return tests, messages, verdicts, collected
 
@@ -473,7 +476,7 @@ def check_report(grades: dict[str, ExerciseGrade], show: int | None = 3) -> str:
         ]
         for name, message in failures[:show]:
             lines.append(f"  {name}:")
-            lines.extend(f"    {line}" for line in message.splitlines()[:8])
+            lines.extend(f"    {line}" for line in message.splitlines()[:MESSAGE_LINES])
         if show is not None and len(failures) > show:
             short = exercise.split("_", 1)[0]
             lines.append(

@@ -61,10 +61,10 @@ def frame_indices(got, where: str) -> np.ndarray:
 
 
 def describe_frames(frames: np.ndarray, speed: np.ndarray, fraction: float) -> str:
-    """One line per frame: its speed and whether it is a local maximum / minimum."""
+    """One line per frame (the first four): its speed and whether it is a local maximum / minimum."""
     top, bottom = np.quantile(speed, 1 - fraction), np.quantile(speed, fraction)
     lines = []
-    for t in frames[:8]:
+    for t in frames[:4]:
         if not 0 <= t < len(speed):
             kind = f"outside the demonstration's frames 0..{len(speed) - 1}"
             lines.append(f"  frame {t}: {kind}")
@@ -78,6 +78,8 @@ def describe_frames(frames: np.ndarray, speed: np.ndarray, fraction: float) -> s
         else:
             kind = "not a local extremum"
         lines.append(f"  frame {t}: speed {speed[t]:.4f} m/s, {kind}")
+    if len(frames) > 4:
+        lines.append(f"  and {len(frames) - 4} more")
     return "\n".join(lines)
 
 
