@@ -7,6 +7,9 @@ so that the notebooks shrink their budgets, and with this checkout first on the 
 failing cell fails the test with the cell's source and error. Each notebook must show at least one
 inline figure (an SVG or HTML output), and weigh less than ``MAX_EXECUTED_BYTES`` executed.
 
+A notebook with course exercises runs with the reference answers of its marked cells filled in
+(``### BEGIN SOLUTION``): each exercise's check must print that it passed.
+
 A number the text quotes from the notebook's own output is marked in the markdown as
 ``<span class="printed">0.07</span>`` (rendered as plain text): the executed notebook must print it
 (as a whole number token: ``0.5`` is not found in ``0.51``). Mark only what any run prints, whatever
@@ -36,6 +39,10 @@ MAX_EXECUTED_BYTES = 2_000_000
 FIGURE_TYPES = ("image/svg+xml", "text/html")
 #: A number the text quotes from the notebook's own output (module docstring).
 PRINTED_MARK = re.compile(r'<span class="printed">([^<]+)</span>')
+#: A course exercise's reference answer in a code cell (course/grade.py strips it from the student
+#: bundle); each is followed by a check that prints the verdict below.
+SOLUTION_MARK = "### BEGIN SOLUTION"
+EXERCISE_PASSED = re.compile(r"^[\w -]+: exercise passed$", re.MULTILINE)
 #: Terminal colour codes in IPython tracebacks.
 ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -113,6 +120,11 @@ def test_notebook_runs_top_to_bottom(path, monkeypatch):
     size = len(nbformat.writes(notebook).encode())
     assert size < MAX_EXECUTED_BYTES, f"{path.name} weighs {size / 1e6:.1f} MB executed (limit 2 MB)"
     assert "IProgress not found" not in output_text(notebook), f"{path.name}: tqdm warns that ipywidgets is missing"
+    exercises = sum(cell.cell_type == "code" and SOLUTION_MARK in cell.source for cell in notebook.cells)
+    passed = EXERCISE_PASSED.findall(output_text(notebook))
+    assert len(passed) == exercises, (
+        f"{path.name}: {exercises} exercises with their reference answers, {len(passed)} checks passed"
+    )
     unprinted = unprinted_claims(notebook)
     assert not unprinted, f"{path.name}: the text quotes {unprinted} as printed, but no output prints them"
     figures = [

@@ -1,52 +1,56 @@
-"""The grading fixture: import a student's exercise module from the chosen submission folder.
+"""The grading fixture: the student's exercise module, run in a process of its own.
 
 The folder is ``$TOOLIMIT_SUBMISSION`` (a path, relative to the current directory or absolute);
 without it, the stubs in ``course/exercises``. Every grader asks for its module with
-``submission("exNN_name")`` and calls the functions on it; the returned object turns the usual
-student mistakes (missing file, syntax error, function not written yet, an exception, a call that
-never returns) into one readable failure, and refuses a submission that calls an existing
-implementation of its exercise (the grader's ``FORBIDDEN`` list, plus the course's solutions and
-graders; see ``grading.py``).
+``submission("exNN_name")`` and calls the functions on it: each call sends the inputs to the
+student's process (``student_process.py``) and returns the outputs it sent back, decoded as plain
+values (``isolation.py``), so the student's code never runs in this process. The returned object
+turns the usual student mistakes (missing file, syntax error, function not written yet, an
+exception, a call that never returns, a crash) into one readable failure, and refuses a submission
+that calls an existing implementation of its exercise (the grader's ``FORBIDDEN`` list, plus the
+course's solutions and graders; the guard runs in the student's process, see ``grading.py``). A
+grader's own error on a value it received becomes one message naming what the function returns
+(the grader's ``RETURNS``).
 
 Each student call runs under a time limit (``$TOOLIMIT_CALL_TIME_LIMIT`` seconds, default 20, or
-the grader's ``CALL_TIME_LIMIT_S``); after one call ran out of time, the exercise's later calls fail
-at once. With ``$TOOLIMIT_GRADE_REPORT`` set, every test's outcome is appended to that file as a
-JSON line (``course/grade.py`` reads it).
+the grader's ``CALL_TIME_LIMIT_S``): the student's process stops it, or is killed
+``KILL_MARGIN_S`` later; after one call ran out of time, the exercise's later calls fail at once.
+With ``$TOOLIMIT_GRADE_REPORT`` set, every test's outcome is appended to that file as a JSON line
+(``course/grade.py`` reads it).
 """
 
 from __future__ import annotations
 
 import functools
-import importlib.util
 import json
 import os
-import traceback
+import pickle
+import subprocess
+import sys
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-import numpy as np
 import pytest
-from grading import (
-    CallTimer,
-    Forbidden,
-    ForbiddenUse,
-    Guard,
-    ImportFailed,
-    MissingFile,
-    NotWritten,
-    TooSlow,
-    _Stop,
-    fail,
-    static_violations,
-)
+from grading import ForbiddenUse, ImportFailed, MissingFile, NotWritten, TooSlow, fail
+from isolation import ChannelClosed, decode, keep_memory_private, loads, receive, send
 
 SUBMISSION_ENV = "TOOLIMIT_SUBMISSION"
 CALL_LIMIT_ENV = "TOOLIMIT_CALL_TIME_LIMIT"
 REPORT_ENV = "TOOLIMIT_GRADE_REPORT"
 DEFAULT_SUBMISSION = Path(__file__).resolve().parents[1] / "exercises"
 DEFAULT_CALL_TIME_LIMIT_S = 20.0
+STUDENT_PROCESS = Path(__file__).resolve().parent / "student_process.py"
+#: seconds for the student's process to import what the exercise needs (torch, stable-baselines3)
+STARTUP_TIME_S = 120.0
+#: seconds past a call's limit before the grader kills a student's process that did not stop itself
+KILL_MARGIN_S = 10.0
+PROCESSES: list[StudentProcess] = []
+RECEIVED: list[str] = []  # the functions whose values the running test received
+
+keep_memory_private()  # the student's process cannot read this one's memory or environment
 
 
 def submission_folder() -> Path:
@@ -59,86 +63,156 @@ def forbidden_message(path: Path, uses: list[str]) -> str:
     return (
         f"0 points for this exercise: {path.name} uses {'; '.join(uses[:3])}. The grader refuses an existing "
         "implementation of the function you are asked to write (the library's, a dependency's, the course's "
-        "solutions or graders) and what would hide one (other processes, replacing the profiler). Write it "
+        "solutions or graders) and what would hide one (threads, other processes, replacing the profiler). Write it "
         "yourself: the other toolimit names (ToolDemo, RobotModel, ...) and numpy, scipy and torch building blocks "
         "stay allowed."
     )
 
 
-def _student_line(error: BaseException, path: Path) -> str:
-    """``line 12`` of the student's file where the exception passed last, or ''."""
-    lines = [frame.lineno for frame in traceback.extract_tb(error.__traceback__) if Path(frame.filename) == path]
-    return f" (line {lines[-1]} of {path.name})" if lines else ""
+def student_environment() -> dict[str, str]:
+    """The student's process's environment: what Python needs, nothing of the grader's (no report
+    file, no case seed); one thread for numpy and torch."""
+    kept = ("PATH", "HOME", "LANG", "LC_ALL", "PYTHONPATH", "VIRTUAL_ENV", "TMPDIR", "SYSTEMROOT", "TOOLIMIT_QUICK")
+    env = {name: os.environ[name] for name in kept if name in os.environ}
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        env[name] = "1"
+    return env
+
+
+class StudentProcess:
+    """The student's module in its own process (``student_process.py``): calls go out as inputs and
+    come back as values (``isolation.py``)."""
+
+    def __init__(self, path: Path, forbidden: tuple[str, ...], preload: tuple[str, ...], time_limit: float) -> None:
+        self.path = path
+        self.time_limit = time_limit
+        self.spec = json.dumps(
+            {"path": str(path), "forbidden": list(forbidden), "preload": list(preload), "time_limit": time_limit}
+        )
+        self.process: subprocess.Popen | None = None
+        self.ready: dict = {}
+
+    def start(self) -> dict:
+        """Start the process and import the module; its first message (status ready, forbidden,
+        import_error or too_slow)."""
+        self.workdir = tempfile.TemporaryDirectory(prefix="student_")
+        self.process = subprocess.Popen(
+            [sys.executable, str(STUDENT_PROCESS), self.spec],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            env=student_environment(),
+            cwd=self.workdir.name,
+        )
+        # the imports (torch: seconds on a loaded machine) and the student's module's own time limit
+        self.ready = self.receive(STARTUP_TIME_S + self.time_limit)
+        return self.ready
+
+    def receive(self, timeout_s: float) -> dict:
+        assert self.process is not None and self.process.stdout is not None
+        try:
+            return loads(receive(self.process.stdout.fileno(), timeout_s))
+        except TimeoutError:
+            self.stop()
+            return {"status": "killed_too_slow"}
+        except (ChannelClosed, ValueError):
+            code = self.process.poll()
+            self.stop()
+            return {"status": "ended", "code": code}
+
+    def call(self, function: str, args: tuple, kwargs: dict, gradients: bool) -> dict:
+        if self.process is None or self.process.poll() is not None:
+            status = self.start()
+            if status.get("status") != "ready":
+                return status
+        assert self.process is not None and self.process.stdin is not None
+        request = pickle.dumps({"function": function, "args": args, "kwargs": kwargs, "gradients": gradients})
+        try:
+            send(self.process.stdin.fileno(), request)
+        except OSError:
+            code = self.process.poll()
+            self.stop()
+            return {"status": "ended", "code": code}
+        # the student's process stops a call at the limit itself; this margin covers one that hides
+        # from its timer (catching every exception)
+        return self.receive(self.time_limit + KILL_MARGIN_S)
+
+    def stop(self) -> None:
+        if self.process is not None:
+            if self.process.poll() is None:
+                self.process.kill()
+            self.process.wait()
+            for stream in (self.process.stdin, self.process.stdout):
+                if stream is not None:
+                    stream.close()
+            self.process = None
 
 
 class StudentModule:
-    """A student's module whose functions fail the test with a clear message when unfinished,
-    failing, too slow, or calling a forbidden implementation."""
+    """A student's module in its own process, whose functions fail the test with a clear message
+    when unfinished, failing, too slow, or calling a forbidden implementation, and otherwise
+    return the decoded values (numbers, arrays, tensors, or an ``Opaque`` naming another type)."""
 
-    def __init__(self, module: ModuleType, path: Path, forbidden: Forbidden, time_limit: float, hint: str = "") -> None:
-        self._module = module
+    def __init__(self, process: StudentProcess, hint: str = "") -> None:
+        self._process = process
+        self._path = process.path
         self._hint = hint
-        self._path = path
-        self._forbidden = forbidden
-        self._time_limit = time_limit
+        self._time_limit = process.time_limit
         self._blocked: Exception | None = None  # a verdict every later call repeats
+        status = process.ready.get("status")
+        if status == "forbidden":
+            self._blocked = ForbiddenUse(forbidden_message(self._path, process.ready["uses"]))
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):
             raise AttributeError(name)
-        if self._blocked is not None:
-            raise type(self._blocked)(str(self._blocked))
-        if not hasattr(self._module, name):
-            fail(f"{self._path} has no function `{name}`: keep the name and signature of the stub")
-        value = getattr(self._module, name)
-        if not callable(value):
-            return value
 
-        @functools.wraps(value)
         def call(*args: Any, **kwargs: Any) -> Any:
-            if self._blocked is not None:
-                raise type(self._blocked)(str(self._blocked))
-            guard, timer, error = Guard(self._forbidden), CallTimer(self._time_limit), None
-            try:
-                with guard, timer:
-                    result = materialised(value(*args, **kwargs))
-            except (Exception, _Stop) as raised:
-                error = raised
-            if guard.violation or guard.tampered:
-                use = guard.violation or "sys.setprofile (the grader's watch was switched off)"
-                self._blocked = ForbiddenUse(forbidden_message(self._path, [use]))
-                raise self._blocked
-            if timer.expired:
-                self._blocked = TooSlow(
-                    f"`{name}` did not return within {self._time_limit:g} s (an endless loop?); "
-                    f"the exercise's later calls are not run{self._hint}"
-                )
-                raise self._blocked
-            if isinstance(error, NotImplementedError):
-                raise NotWritten(f"`{name}` in {self._path} is not written yet (it raises NotImplementedError)")
-            if error is not None:
-                message = str(error).strip().splitlines()[0] if str(error).strip() else ""
-                fail(f"`{name}` raised {type(error).__name__}: {message}{_student_line(error, self._path)}")
-            return result
+            return self._call(name, args, kwargs, gradients=False)[0]
 
+        def with_gradients(*args: Any, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+            """(value, {parameter name: gradient or None}): the student's loss backpropagated in
+            their process, through the first torch module among the arguments."""
+            return self._call(name, args, kwargs, gradients=True)
+
+        call.with_gradients = with_gradients  # type: ignore[attr-defined]
+        call.__name__ = name
         return call
 
-
-def materialised(result: Any) -> Any:
-    """The result with lazy parts computed now, under the guard: an iterator becomes a list, an
-    object that only converts to an array (``__array__``) becomes the array; tuples and lists
-    element by element. Arrays, tensors, numbers and None are returned as they are."""
-    if isinstance(result, (tuple, list)):
-        return type(result)(materialised(item) for item in result)
-    if result is None or isinstance(result, (np.ndarray, np.generic, int, float, complex, bool, str)):
-        return result
-    if type(result).__module__.split(".")[0] == "torch":
-        return result
-    if hasattr(result, "__next__"):
-        return [materialised(item) for item in result]
-    if hasattr(result, "__array__"):
-        return np.asarray(result)
-    return result
+    def _call(self, name: str, args: tuple, kwargs: dict, gradients: bool) -> tuple[Any, dict[str, Any]]:
+        if self._blocked is not None:
+            raise type(self._blocked)(str(self._blocked))
+        reply = self._process.call(name, args, kwargs, gradients)
+        status = reply.get("status")
+        if status == "ok":
+            RECEIVED.append(name)
+            grads = {str(key): decode(value) for key, value in dict(reply.get("gradients") or {}).items()}
+            return decode(reply.get("value")), grads
+        if status == "forbidden":
+            self._blocked = ForbiddenUse(forbidden_message(self._path, list(reply.get("uses", []))))
+            raise self._blocked
+        if status in ("too_slow", "killed_too_slow"):
+            self._process.stop()
+            self._blocked = TooSlow(
+                f"`{name}` did not return within {self._time_limit:g} s (an endless loop?); "
+                f"the exercise's later calls are not run{self._hint}"
+            )
+            raise self._blocked
+        if status == "not_written":
+            raise NotWritten(f"`{name}` in {self._path} is not written yet (it raises NotImplementedError)")
+        if status == "no_function":
+            fail(f"{self._path} has no function `{name}`: keep the name and signature of the stub")
+        if status == "error":
+            fail(f"`{name}` raised {reply.get('type')}: {reply.get('message')}{reply.get('where', '')}")
+        if status == "import_error":
+            raise ImportFailed(str(reply.get("message")))
+        if status == "ended":
+            fail(
+                f"`{name}` ended its process (exit code {reply.get('code')}): a crash, os._exit or a signal; "
+                "the next call starts your module again"
+            )
+        fail(f"`{name}`: the grader could not read your process's answer ({status})")
+        raise AssertionError  # unreachable: fail raises
 
 
 def call_time_limit(grader: ModuleType | None) -> float:
@@ -147,56 +221,83 @@ def call_time_limit(grader: ModuleType | None) -> float:
     return float(getattr(grader, "CALL_TIME_LIMIT_S", DEFAULT_CALL_TIME_LIMIT_S))
 
 
-@functools.cache
 def load_submission(
     module_name: str,
     forbidden_names: tuple[str, ...] = (),
     time_limit: float = DEFAULT_CALL_TIME_LIMIT_S,
     hint: str = "",
+    preload: tuple[str, ...] = (),
 ) -> StudentModule:
-    """Import ``<folder>/<module_name>.py`` under a private name (so solutions never clash),
-    under the guard, then read its source for forbidden names."""
+    """Start the student's process for ``<folder>/<module_name>.py`` (imported there under the guard,
+    its source read for forbidden names), once per session: a file that does not import fails every
+    test with the same verdict without starting it again."""
+    outcome = _started(module_name, forbidden_names, time_limit, hint, preload)
+    if isinstance(outcome, BaseException):
+        raise type(outcome)(str(outcome))
+    return outcome
+
+
+@functools.cache
+def _started(
+    module_name: str, forbidden_names: tuple[str, ...], time_limit: float, hint: str, preload: tuple[str, ...]
+) -> StudentModule | MissingFile | ImportFailed | TooSlow:
     folder = submission_folder()
     path = folder / f"{module_name}.py"
     if not path.is_file():
-        raise MissingFile(f"no file {module_name}.py in the submission folder {folder} (set ${SUBMISSION_ENV})")
-    forbidden = Forbidden(forbidden_names, path)
-    private_name = f"_submission_{abs(hash(str(path)))}_{module_name}"
-    spec = importlib.util.spec_from_file_location(private_name, path)
-    module = importlib.util.module_from_spec(spec)
-    guard, timer, error = Guard(forbidden), CallTimer(time_limit), None
-    try:
-        with guard, timer:
-            spec.loader.exec_module(module)
-    except (Exception, _Stop) as raised:
-        error = raised
-    student = StudentModule(module, path, forbidden, time_limit, hint)
-    uses = [guard.violation] if guard.violation else []
-    if error is not None and not uses:
-        if timer.expired:
-            raise TooSlow(f"importing {path.name} did not finish within {time_limit:g} s")
-        raise ImportFailed(f"{path} cannot be imported: {type(error).__name__}: {error}")
-    uses += static_violations(path.read_text(), forbidden)
-    if uses:
-        student._blocked = ForbiddenUse(forbidden_message(path, uses))
-    return student
+        return MissingFile(f"no file {module_name}.py in the submission folder {folder} (set ${SUBMISSION_ENV})")
+    process = StudentProcess(path.resolve(), forbidden_names, preload, time_limit)
+    PROCESSES.append(process)
+    status = process.start()
+    if status.get("status") == "import_error":
+        return ImportFailed(str(status["message"]))
+    if status.get("status") in ("too_slow", "killed_too_slow"):
+        return TooSlow(str(status.get("message") or f"importing {path.name} did not finish in time"))
+    if status.get("status") == "ended":
+        return ImportFailed(f"importing {path.name} ended its process (exit code {status.get('code')})")
+    return StudentModule(process, hint)
 
 
 @pytest.fixture
 def submission(request) -> Callable[[str], StudentModule]:
-    """``submission("ex01_velocity_keypoints")`` -> the student's module (imported once per session),
+    """``submission("ex01_velocity_keypoints")`` -> the student's module (one process per session),
     guarded by the calling grader's ``FORBIDDEN`` list."""
     forbidden = tuple(getattr(request.module, "FORBIDDEN", ()))
     limit = call_time_limit(request.module)
     hint = getattr(request.module, "TOO_SLOW_HINT", "")
+    preload = tuple(getattr(request.module, "STUDENT_IMPORTS", ()))
 
     def load(module_name: str) -> StudentModule:
         try:
-            return load_submission(module_name, forbidden, limit, hint)
+            return load_submission(module_name, forbidden, limit, hint, preload)
         except (MissingFile, ImportFailed, TooSlow) as verdict:
             raise type(verdict)(str(verdict)) from None
 
     return load
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_pyfunc_call(pyfuncitem: pytest.Function):
+    """A grader that fails on an odd value of the student's (an exception while checking it, not a
+    check that failed) gives one message saying what was expected (the grader's ``RETURNS``)."""
+    RECEIVED.clear()
+    outcome = yield
+    error = outcome.excinfo[1] if outcome.excinfo else None
+    if error is None or not RECEIVED or isinstance(error, (pytest.fail.Exception, pytest.skip.Exception)):
+        return
+    returns = getattr(pyfuncitem.module, "RETURNS", {})
+    expected = "; ".join(f"`{name}` returns {returns[name]}" for name in dict.fromkeys(RECEIVED) if name in returns)
+    text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    outcome.force_exception(
+        pytest.fail.Exception(
+            f"your value could not be checked ({text}): expected that {expected or 'the stub documents'}",
+            pytrace=False,
+        )
+    )
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    for process in PROCESSES:
+        process.stop()
 
 
 # --- the report grade.py reads -------------------------------------------------------------------

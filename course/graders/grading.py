@@ -11,8 +11,13 @@ and graders are forbidden for every exercise. A name may be a module or package 
 a class (its methods) or a function. :func:`static_violations` reads the submission's source
 (imports, attribute accesses, ``getattr``/``import_module`` with constant strings) and
 :class:`Guard` watches every Python call made while the student's code runs (``sys.setprofile``):
-a forbidden function that starts, by whatever name or path it was reached, ends the exercise with
-0 points and a message saying so.
+a forbidden function that starts, by whatever name or path it was reached (or its source run again,
+recognised by its compiled fingerprint), or a thread that starts, ends the exercise with 0 points and
+a message saying so. The guard runs in the student's process (``student_process.py``): it is the
+honest student's feedback; what protects the score is that process's boundary (``isolation.py``).
+
+Cases: :func:`case_seeds` gives a test its seeds, the public ones or, with the instructor's hidden
+seed, cases no student has seen.
 """
 
 from __future__ import annotations
@@ -35,6 +40,11 @@ import pytest
 COURSE = Path(__file__).resolve().parents[1]
 GRADERS = COURSE / "graders"
 SOLUTIONS = COURSE / "solutions"
+#: How a message names the course's own code (solutions, graders): refused by file, never by
+#: fingerprint (a student may write a short function as the reference solution does).
+COURSE_CODE = ("the course's reference solutions", "the course's graders")
+#: The graders' folder's files that run around the student's code (not references of an exercise).
+GRADING_MACHINERY = ("conftest.py", "grading.py", "isolation.py", "student_process.py")
 
 #: Modules that start other processes or replace the interpreter's profiler: what runs there is
 #: invisible to the guard, and no exercise needs them.
@@ -65,7 +75,33 @@ UNWATCHABLE = (
     "sys.monitoring",
     "threading.setprofile",
     "threading.settrace",
+    "_thread.start_new_thread",
+    "_thread.start_new",
+    "_thread.start_joinable_thread",
 )
+
+
+# --- cases: public (the student's self-check) or hidden (the instructor's seed) ------------------
+#: The instructor's hidden seed (``grade.py --hidden-seed N``); unset, the public cases are graded.
+HIDDEN_SEED_ENV = "TOOLIMIT_HIDDEN_SEED"
+
+
+def case_seeds(count: int, offset: int = 0) -> list[int]:
+    """The seeds of ``count`` cases of one test: ``offset .. offset + count - 1`` (public, what the
+    student's self-check runs), or, with ``$TOOLIMIT_HIDDEN_SEED`` set, ``count`` seeds drawn from
+    it (at least 1000, so never a public one): cases no student has seen."""
+    import os
+
+    hidden = os.environ.get(HIDDEN_SEED_ENV)
+    if not hidden:
+        return list(range(offset, offset + count))
+    rng = np.random.default_rng([int(hidden), offset])
+    seeds: list[int] = []
+    while len(seeds) < count:
+        seed = int(rng.integers(1000, 2**31 - 1))
+        if seed not in seeds:
+            seeds.append(seed)
+    return seeds
 
 
 # --- verdicts: failures that grade.py reads as more than one failed test ------------------------
@@ -125,6 +161,8 @@ def fmt(value: Any, digits: int = 5, limit: int = 10) -> str:
     ``[1, 2, 3]``, ``[[0.1, 0.2], [0.3, 0.4]]``; more than ``limit`` values per row are elided."""
     if value is None or isinstance(value, (str, bool, np.bool_)):
         return str(value)
+    if type(value).__name__ == "Opaque":  # isolation.Opaque: an object of the student's, by its type
+        return repr(value)
     if hasattr(value, "detach") and hasattr(value, "cpu"):  # a torch tensor
         value = value.detach().cpu().numpy()
     if isinstance(value, (int, np.integer)):
@@ -135,9 +173,13 @@ def fmt(value: Any, digits: int = 5, limit: int = 10) -> str:
             return str(number)
         text = f"{number:.{digits}g}"
         return "0" if text == "-0" else text
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except Exception:  # noqa: BLE001 - any object: named by its type
+        return f"a {type(value).__name__}"
     if array.ndim == 0:
-        return fmt(array.item(), digits, limit)
+        item = array.item()
+        return f"a {type(value).__name__}" if item is value else fmt(item, digits, limit)
     if array.dtype == object:
         return "[" + ", ".join(fmt(item, digits, limit) for item in value) + "]"
     items = list(array)
@@ -257,21 +299,50 @@ class Forbidden:
             if "." in qualified and not isinstance(target, type):  # a method: also refused as x.method
                 self.attributes[qualified.rsplit(".", 1)[-1]] = name
         # the course's own reference code, whatever the exercise
-        for folder, what in ((SOLUTIONS, "the course's reference solutions"), (GRADERS, "the course's graders")):
+        for folder, what in zip((SOLUTIONS, GRADERS), COURSE_CODE):
             if folder.is_dir():
                 self.names[f"course.{folder.name}"] = what
                 for path in folder.glob("*.py"):
                     path = path.resolve()
-                    if path != own and path.name not in ("conftest.py", "grading.py"):
+                    if path != own and path.name not in GRADING_MACHINERY:
                         self.files[path] = what
                         if folder == GRADERS:  # importable by name while grading (its folder is on sys.path)
                             self.names[path.stem] = what
-        for name in ("grading", "conftest"):  # the grader's own machinery: never part of an answer
+        for name in ("grading", "conftest", "isolation", "student_process"):  # the grader's own machinery
             self.names[name] = "the course's grading code"
         for name in UNWATCHABLE:
             self.names[name] = f"{name} (code run there is invisible to the grader)"
         self._file_cache: dict[str, str | None] = {}
         self.call_cache: dict[types.CodeType, str | None] = {}  # filled by Guard
+        self.fingerprints = self._fingerprints()
+
+    def _fingerprints(self) -> dict[tuple, str]:
+        """The fingerprint of every function compiled from a forbidden library file: the same source run
+        again (``exec(inspect.getsource(...))``, a copy saved under another name) has the same one."""
+        prints: dict[tuple, str] = {}
+        for location, what in self.files.items():
+            if what in COURSE_CODE:  # a student's own code may read like a short reference solution
+                continue
+            paths = sorted(location.rglob("*.py")) if location.is_dir() else [location]
+            for path in paths:
+                try:
+                    code = compile(path.read_text(encoding="utf-8"), str(path), "exec")
+                except (OSError, SyntaxError, ValueError):
+                    continue
+                for nested in _nested_codes(code):
+                    print_ = fingerprint(nested)
+                    if print_ is not None:
+                        prints.setdefault(print_, what)
+        return prints
+
+    def code_verdict(self, code: types.CodeType) -> str | None:
+        """Why running this code object is forbidden (by identity, file or fingerprint), or None."""
+        verdict = self.codes.get(code) or self.file_verdict(code.co_filename)
+        if verdict is None:
+            print_ = fingerprint(code)
+            if print_ is not None and print_ in self.fingerprints:
+                verdict = f"{self.fingerprints[print_]} (its source run again)"
+        return verdict
 
     def file_verdict(self, filename: str) -> str | None:
         """The forbidden item a code object's file belongs to, or None."""
@@ -309,6 +380,30 @@ class Forbidden:
             if dotted == name or dotted.startswith(name + "."):
                 return what
         return None
+
+
+#: Shorter bytecode is not fingerprinted: a one-line getter of the student's may equal the library's.
+MIN_FINGERPRINT_BYTES = 64
+
+
+def fingerprint(code: types.CodeType) -> tuple | None:
+    """What identifies a function's compiled source, whatever file or name it was run from: its
+    name, bytecode, names, variables and constants (nested code objects excluded)."""
+    if len(code.co_code) < MIN_FINGERPRINT_BYTES:
+        return None
+    constants = tuple(repr(value) for value in code.co_consts if not isinstance(value, types.CodeType))
+    return (code.co_name, code.co_code, code.co_names, code.co_varnames, constants)
+
+
+def _nested_codes(code: types.CodeType) -> Iterable[types.CodeType]:
+    yield code
+    for value in code.co_consts:
+        if isinstance(value, types.CodeType):
+            yield from _nested_codes(value)
+
+
+#: The builtins that start a thread (``_thread``'s, whatever copy of the module holds them).
+THREAD_STARTERS = ("start_new_thread", "start_new", "start_joinable_thread")
 
 
 # --- static check --------------------------------------------------------------------------------
@@ -427,6 +522,12 @@ class Guard:
             if self._imports and frame is self._imports[-1]:
                 self._imports.pop()
             return
+        if event == "c_call":
+            if getattr(arg, "__module__", None) == "_thread" and getattr(arg, "__name__", "") in THREAD_STARTERS:
+                if self.violation is None:
+                    self.violation = "a thread (code run there is invisible to the grader)"
+                raise _Stop(self.violation)
+            return
         if event != "call":
             return
         code = frame.f_code
@@ -436,7 +537,7 @@ class Guard:
         if self._imports:
             return
         if code not in self._checked:
-            self._checked[code] = self.forbidden.codes.get(code) or self.forbidden.file_verdict(code.co_filename)
+            self._checked[code] = self.forbidden.code_verdict(code)
         verdict = self._checked[code]
         if verdict:
             if self.violation is None:

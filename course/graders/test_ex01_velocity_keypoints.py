@@ -8,14 +8,26 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from grading import check, fmt, fmt_shape
+from grading import case_seeds, check, fail, fmt, fmt_shape
 
 from toolimit.align.keypoints import velocity_keypoints as reference_keypoints
 from toolimit.demos import ToolDemo
 
 MODULE = "ex01_velocity_keypoints"
-SEEDS = range(8)
+SEEDS = case_seeds(8)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex01_output_is_sorted_unique_int_frames": 1.5,
+    "test_ex01_first_and_last_frame_are_keypoints": 2,
+    "test_ex01_keypoints_match_reference": 6.5,
+}
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {
+    "velocity_keypoints": "a 1-D integer array of frame indices in 0..T-1, sorted, first and last frame included"
+}
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "toolimit.demos", "toolimit.align"]
 FORBIDDEN = ["toolimit.align.keypoints"]
 
 
@@ -35,11 +47,28 @@ def random_demo(seed: int) -> ToolDemo:
     return ToolDemo(head=head, handle=head + 0.4 * axis, fps=fps, tool="spade", source=f"grader seed {seed}")
 
 
+def frame_indices(got, where: str) -> np.ndarray:
+    """The student's answer as a 1-D integer array, or a failure naming what was expected."""
+    try:
+        frames = np.asarray(got, dtype=float).ravel()
+    except (TypeError, ValueError):
+        fail(f"{where}: expected a 1-D integer array of frame indices, got {fmt(got)}")
+    check(
+        np.all(np.isfinite(frames)) and np.all(frames == np.round(frames)),
+        lambda: f"{where}: expected integer frame indices, got {fmt(frames)}",
+    )
+    return frames.astype(int)
+
+
 def describe_frames(frames: np.ndarray, speed: np.ndarray, fraction: float) -> str:
-    """One line per frame: its speed and whether it is a local maximum / minimum."""
+    """One line per frame (the first four): its speed and whether it is a local maximum / minimum."""
     top, bottom = np.quantile(speed, 1 - fraction), np.quantile(speed, fraction)
     lines = []
-    for t in frames[:8]:
+    for t in frames[:4]:
+        if not 0 <= t < len(speed):
+            kind = f"outside the demonstration's frames 0..{len(speed) - 1}"
+            lines.append(f"  frame {t}: {kind}")
+            continue
         if t in (0, len(speed) - 1):
             kind = "an end frame"
         elif speed[t] > speed[t - 1] and speed[t] > speed[t + 1]:
@@ -49,6 +78,8 @@ def describe_frames(frames: np.ndarray, speed: np.ndarray, fraction: float) -> s
         else:
             kind = "not a local extremum"
         lines.append(f"  frame {t}: speed {speed[t]:.4f} m/s, {kind}")
+    if len(frames) > 4:
+        lines.append(f"  and {len(frames) - 4} more")
     return "\n".join(lines)
 
 
@@ -74,7 +105,7 @@ def test_ex01_output_is_sorted_unique_int_frames(submission, seed):
 @pytest.mark.parametrize("seed", SEEDS)
 def test_ex01_first_and_last_frame_are_keypoints(submission, seed):
     demo = random_demo(seed)
-    frames = np.asarray(submission(MODULE).velocity_keypoints(demo, 0.05)).ravel()
+    frames = frame_indices(submission(MODULE).velocity_keypoints(demo, 0.05), f"seed {seed}")
     check(0 in frames, f"seed {seed}: the first frame (0) is always a keypoint; you returned {fmt(frames, limit=20)}")
     last = demo.n_frames - 1
     check(
@@ -89,7 +120,7 @@ def test_ex01_first_and_last_frame_are_keypoints(submission, seed):
 def test_ex01_keypoints_match_reference(submission, seed, fraction):
     demo = random_demo(seed)
     expected = reference_keypoints(demo, fraction)
-    got = np.asarray(submission(MODULE).velocity_keypoints(demo, fraction)).ravel().astype(int)
+    got = frame_indices(submission(MODULE).velocity_keypoints(demo, fraction), f"seed {seed}, fraction {fraction}")
     speed = demo.speed()
     missing = np.setdiff1d(expected, got)
     extra = np.setdiff1d(got, expected)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from grading import check, fail, fmt, fmt_shape
+from grading import case_seeds, check, fail, fmt, fmt_shape
 from scipy.spatial.distance import pdist
 
 from toolimit.align.sampler import minimum_element_distance as reference_minimum_distance
@@ -17,6 +17,25 @@ from toolimit.align.sampler import sample_element_positions as reference_sample
 
 MODULE = "ex02_element_sampling"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex02_minimum_distance_matches_reference": 2,
+    "test_ex02_sample_shape_and_dtype": 1,
+    "test_ex02_elements_respect_min_distance": 1.5,
+    "test_ex02_on_ground_elements_have_zero_height": 0.5,
+    "test_ex02_returns_none_when_impossible": 0.5,
+    "test_ex02_same_generator_state_gives_same_positions": 0.5,
+    "test_ex02_mixture_statistics": 2,
+    "test_ex02_each_element_picks_its_own_keypoint": 1,
+    "test_ex02_planar_covariance_keeps_the_plane": 1,
+}
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {
+    "minimum_element_distance": "a float, metres",
+    "sample_element_positions": "an (n_elements, 3) float array of positions in metres, or None",
+}
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "scipy.spatial", "toolimit.align"]
 FORBIDDEN = ["toolimit.align.sampler"]
 #: Seconds a single call may take before the grader assumes an endless loop (conftest.py).
 CALL_TIME_LIMIT_S = 20
@@ -41,16 +60,20 @@ def nearest_keypoint(samples: np.ndarray, keypoints: np.ndarray) -> np.ndarray:
 
 
 def draw_singles(sample, n_draws: int, seed: int, weights) -> np.ndarray:
-    """(n_draws, 3) positions from n_draws calls with one element each, one generator for all."""
-    rng = np.random.default_rng(seed)
-    draws = [sample(FAR_KEYPOINTS, 1, COVARIANCE, 0.0, rng, weights=weights) for _ in range(n_draws)]
+    """(n_draws, 3) positions from n_draws calls with one element each, a generator seeded
+    (seed, draw) for each (your function runs in another process: a generator it advances does not
+    come back)."""
+    draws = [
+        sample(FAR_KEYPOINTS, 1, COVARIANCE, 0.0, np.random.default_rng([seed, draw]), weights=weights)
+        for draw in range(n_draws)
+    ]
     if any(draw is None for draw in draws):
         fail(f"rng seed {seed}: returned None for a single element with min_distance 0 (always possible)")
     return np.concatenate([np.asarray(draw, dtype=float).reshape(1, 3) for draw in draws])
 
 
 # --- minimum_element_distance ------------------------------------------------------------------
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", case_seeds(6))
 def test_ex02_minimum_distance_matches_reference(submission, seed):
     rng = np.random.default_rng(seed)
     points = np.cumsum(rng.normal(scale=0.05, size=(int(rng.integers(5, 120)), 3)), axis=0)
@@ -66,7 +89,7 @@ def test_ex02_minimum_distance_matches_reference(submission, seed):
 
 
 # --- sample_element_positions: output and rules ------------------------------------------------
-@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("seed", case_seeds(5, 100))
 def test_ex02_sample_shape_and_dtype(submission, seed):
     got = submission(MODULE).sample_element_positions(
         NEAR_KEYPOINTS, 4, NEAR_COVARIANCE, 0.0, np.random.default_rng(seed)

@@ -14,13 +14,25 @@ import osqp
 import pinocchio as pin
 import pytest
 import scipy.sparse as sp
-from grading import check, fmt, fmt_shape
+from grading import case_seeds, check, fmt, fmt_shape
 
 from toolimit.robots import RobotModel, make_robot
 
 MODULE = "ex03_diff_ik_step"
 #: Existing implementations of this exercise (the library's trajectory optimisation solves the same
 #: QP over a horizon): a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex03_matches_reference_small_steps": 3.5,
+    "test_ex03_matches_reference_at_velocity_limits": 2.5,
+    "test_ex03_matches_reference_at_position_limits": 2.5,
+    "test_ex03_respects_the_limits": 1,
+    "test_ex03_zero_error_gives_zero_velocity": 0.5,
+}
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {"diff_ik_step": "a (N,) float array, the joint velocities in rad/s"}
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "scipy.sparse", "osqp", "pinocchio", "toolimit.robots"]
 FORBIDDEN = ["toolimit.trajopt", "toolimit.compare"]
 VELOCITY_TOLERANCE = 1e-4  # rad/s between your answer and the expected one
 CONSTRAINT_TOLERANCE = 1e-6  # rad/s (velocity limits) and rad (position limits)
@@ -161,25 +173,25 @@ def check_against_reference(submission, robot: RobotModel, case: Case) -> None:
     )
 
 
-@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("seed", case_seeds(4))
 def test_ex03_matches_reference_small_steps(submission, panda, seed):
     """No constraint binds: checks the error, the LOCAL Jacobian, dt and the weights."""
     check_against_reference(submission, panda, make_case(panda, seed, "small"))
 
 
-@pytest.mark.parametrize("seed", range(10, 13))
+@pytest.mark.parametrize("seed", case_seeds(3, 10))
 def test_ex03_matches_reference_at_velocity_limits(submission, panda, seed):
     check_against_reference(submission, panda, make_case(panda, seed, "fast"))
 
 
-@pytest.mark.parametrize("seed", range(20, 23))
+@pytest.mark.parametrize("seed", case_seeds(3, 20))
 def test_ex03_matches_reference_at_position_limits(submission, panda, seed):
     check_against_reference(submission, panda, make_case(panda, seed, "at_limit"))
 
 
 @pytest.mark.parametrize("kind", ["fast", "at_limit"])
 def test_ex03_respects_the_limits(submission, panda, kind):
-    for seed in range(30, 34):
+    for seed in case_seeds(4, 30):
         case = make_case(panda, seed, kind)
         got = student_velocity(submission, panda, case)
         excess = np.abs(got) - panda.velocity_limit

@@ -10,13 +10,24 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from grading import check, fmt
+from grading import case_seeds, check, fmt
 from stable_baselines3.common.policies import ActorCriticPolicy
 
 MODULE = "ex04_cloning_loss"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex04_loss_matches_the_mean_squared_error": 4,
+    "test_ex04_loss_is_deterministic": 1,
+    "test_ex04_gradient_reaches_the_actor_and_not_the_std": 2,
+    "test_ex04_optimising_the_loss_fits_a_linear_expert": 3,
+}
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {"cloning_loss": "a scalar torch tensor (0-d) that requires grad"}
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "torch", "stable_baselines3"]
 FORBIDDEN = ["toolimit.learn.cloning"]
-SEEDS = range(4)
+SEEDS = case_seeds(4)
 
 
 def make_policy(seed: int, obs_dim: int = 6, act_dim: int = 3) -> ActorCriticPolicy:
@@ -53,7 +64,7 @@ def test_ex04_loss_matches_the_mean_squared_error(submission, seed):
     )
     expected = reference(policy, observations, actions)
     check(
-        torch.isclose(got, expected, rtol=1e-5),
+        torch.isclose(got.to(expected.dtype), expected, rtol=1e-5),
         f"{where}: expected the MSE of the Gaussian's mean, {fmt(expected, 6)}; got {fmt(got, 6)} "
         "(a sampled action, a sum instead of a mean, or a log-likelihood give other values)",
     )
@@ -66,6 +77,10 @@ def test_ex04_loss_is_deterministic(submission, seed):
     first = submission(MODULE).cloning_loss(policy, observations, actions)
     second = submission(MODULE).cloning_loss(policy, observations, actions)
     check(
+        isinstance(first, torch.Tensor) and isinstance(second, torch.Tensor),
+        lambda: f"seed {seed}: expected a scalar tensor, got {fmt(first)}",
+    )
+    check(
         torch.equal(first, second),
         lambda: (
             f"seed {seed}: two calls on the same policy and data gave {fmt(first, 6)} and {fmt(second, 6)}: "
@@ -77,13 +92,14 @@ def test_ex04_loss_is_deterministic(submission, seed):
 def test_ex04_gradient_reaches_the_actor_and_not_the_std(submission):
     policy = make_policy(0)
     observations, actions = make_data(0)
-    submission(MODULE).cloning_loss(policy, observations, actions).backward()
-    grad = policy.action_net.weight.grad
+    _, gradients = submission(MODULE).cloning_loss.with_gradients(policy, observations, actions)
+    check(gradients, "seed 0: expected a scalar tensor that requires grad (backward() must reach the policy)")
+    grad = gradients.get("action_net.weight")
     check(
-        grad is not None and torch.any(grad != 0),
+        isinstance(grad, torch.Tensor) and torch.any(grad != 0),
         "seed 0: after backward() no gradient reaches policy.action_net: is the mean detached?",
     )
-    std_grad = policy.log_std.grad
+    std_grad = gradients.get("log_std")
     check(
         std_grad is None or torch.all(std_grad == 0),
         lambda: (
@@ -98,9 +114,14 @@ def test_ex04_optimising_the_loss_fits_a_linear_expert(submission):
     observations, actions = make_data(1, m=256)
     optimiser = torch.optim.Adam(policy.parameters(), lr=3e-3)
     start = reference(policy, observations, actions).item()
-    for _ in range(200):
+    parameters = dict(policy.named_parameters())
+    for step in range(200):
         optimiser.zero_grad()
-        submission(MODULE).cloning_loss(policy, observations, actions).backward()
+        _, gradients = submission(MODULE).cloning_loss.with_gradients(policy, observations, actions)
+        check(gradients, f"seed 1, Adam step {step}: expected a scalar tensor that requires grad")
+        for name, parameter in parameters.items():
+            grad = gradients.get(name)
+            parameter.grad = grad.to(parameter.dtype) if isinstance(grad, torch.Tensor) else None
         optimiser.step()
     end = reference(policy, observations, actions).item()
     check(

@@ -7,18 +7,32 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from grading import check, fmt, fmt_shape
+from grading import case_seeds, check, fmt, fmt_shape
 from stable_baselines3.common.buffers import RolloutBuffer
 
 MODULE = "ex05_ppo_objective"
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
 #: SB3's buffer computes GAE; its PPO.train computes the surrogate.
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex05_gae_matches_stable_baselines3": 4,
+    "test_ex05_gae_special_cases": 2,
+    "test_ex05_surrogate_matches_stable_baselines3": 3,
+    "test_ex05_surrogate_hand_case": 1,
+}
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {
+    "generalized_advantage_estimation": "a tuple (advantages, returns) of two arrays shaped like rewards",
+    "clipped_surrogate_loss": "a scalar (a 0-d tensor or a float), the loss to minimise",
+}
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "torch", "stable_baselines3"]
 FORBIDDEN = [
     "stable_baselines3.common.buffers.RolloutBuffer.compute_returns_and_advantage",
     "stable_baselines3.common.buffers.DictRolloutBuffer.compute_returns_and_advantage",
     "stable_baselines3.ppo.ppo.PPO.train",
 ]
-SEEDS = range(6)
+SEEDS = case_seeds(6)
 
 
 def random_rollout(seed: int, steps: int = 12, envs: int = 3) -> dict:

@@ -9,14 +9,29 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from grading import check, fmt, fmt_shape
+from grading import case_seeds, check, fmt, fmt_shape
 
 from toolimit.demos.video import look_at
 from toolimit.demos.video.lift import ray_plane_intersection as reference_intersection
 
 MODULE = "ex06_ray_plane_lift"
-SEEDS = range(6)
+SEEDS = case_seeds(6)
 #: Existing implementations of this exercise: a submission calling one of them gets 0 (grading.py).
+#: Points of each test group (all its cases share them): 10 for the exercise.
+WEIGHTS = {
+    "test_ex06_rays_match_reference": 3,
+    "test_ex06_the_principal_point_looks_along_the_optical_axis": 1,
+    "test_ex06_intersection_matches_reference": 3,
+    "test_ex06_a_hand_case": 1,
+    "test_ex06_lifting_pixels_recovers_points_on_the_plane": 2,
+}
+#: What each function returns, for the message on a value the checks cannot read.
+RETURNS = {
+    "pixel_rays": "an (M, 3) float array of unit vectors in the world frame",
+    "ray_plane_intersection": "an (M, 3) float array of points in metres, NaN rows where a ray misses",
+}
+#: Imported in the student's process before their module (it may start no thread afterwards).
+STUDENT_IMPORTS = ["numpy", "toolimit.demos.video"]
 FORBIDDEN = ["toolimit.demos.video"]
 
 
@@ -90,7 +105,9 @@ def test_ex06_intersection_matches_reference(submission, seed):
     wrong_nan = np.flatnonzero(np.any(np.isnan(got), axis=1) != ~hits)
     if wrong_nan.size:
         i = int(wrong_nan[0])
-        kind = "misses the plane (parallel or pointing away): expected a row of NaN" if not hits[i] else "meets the plane"
+        kind = (
+            "misses the plane (parallel or pointing away): expected a row of NaN" if not hits[i] else "meets the plane"
+        )
         check(False, f"{where}: ray {fmt(rays[i])} (normal . ray = {rays[i] @ normal:.4f}) {kind}; got {fmt(got[i])}")
     error = np.linalg.norm(got[hits] - expected[hits], axis=1)
     worst = int(np.argmax(error))
@@ -103,8 +120,10 @@ def test_ex06_intersection_matches_reference(submission, seed):
 def test_ex06_a_hand_case(submission):
     got = np.asarray(
         submission(MODULE).ray_plane_intersection(
-            np.array([1.0, 2.0, 3.0]), np.array([[1.0, 0.0, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0], [-2.0, 0.0, 0.0]]),
-            np.array([1.0, 0.0, 0.0]), 2.0,
+            np.array([1.0, 2.0, 3.0]),
+            np.array([[1.0, 0.0, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 1.0], [-2.0, 0.0, 0.0]]),
+            np.array([1.0, 0.0, 0.0]),
+            2.0,
         )
     )
     expected = np.array([[3.0, 2.0, 3.0], [3.0, 2.0 + 8.0 / 3.0, 3.0]])

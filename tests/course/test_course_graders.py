@@ -26,10 +26,14 @@ CHEATING = Path(__file__).resolve().parent / "cheating_solutions"
 EXERCISES = sorted(path.stem for path in (COURSE / "exercises").glob("ex*.py"))
 VARIANTS = sorted(path.name for path in WRONG.iterdir() if path.is_dir() and path.name.startswith("ex"))
 CHEATS = sorted(path.name for path in CHEATING.iterdir() if path.is_dir() and path.name.startswith("ex"))
+#: Submissions that attack the grader rather than call a library: read its frames, patch its checks,
+#: start a raw thread, run the library's source again. Each must score at most a quarter.
+ATTACKING = Path(__file__).resolve().parent / "attacking_solutions"
+ATTACKS = sorted(path.name for path in ATTACKING.iterdir() if path.is_dir() and path.name.startswith("ex"))
 HONEST = Path(__file__).resolve().parent / "honest_solutions"
 HONEST_VARIANTS = sorted(path.name for path in HONEST.iterdir() if path.is_dir() and path.name.startswith("ex"))
-#: A loop the grader's per-call time limit cannot interrupt (it swallows every exception): only the
-#: per-exercise timeout of grade.py stops it.
+#: A loop the per-call timer inside the student's process cannot interrupt (it swallows every
+#: exception): the grader kills that process 10 s after the call's limit.
 STUBBORN_LOOP = """import time
 
 
@@ -39,6 +43,16 @@ def velocity_keypoints(demo, fraction=0.05):
             time.sleep(0.05)
         except BaseException:
             pass
+"""
+#: A module whose import never ends and swallows every exception: only the per-exercise timeout of
+#: grade.py stops it (it kills the grader's process group, the student's process with it).
+LOOP_AT_IMPORT = """import time
+
+while True:
+    try:
+        time.sleep(0.05)
+    except BaseException:
+        pass
 """
 #: An ordinary endless loop: the per-call time limit stops it, the exercise's other tests fail at once.
 PLAIN_LOOP = """def velocity_keypoints(demo, fraction=0.05):
@@ -104,9 +118,16 @@ def grades(tmp_path_factory) -> dict:
         for variant in HONEST_VARIANTS:
             if wrong_solution_file(variant, HONEST).stem == exercise:
                 (wrong / variant).symlink_to(HONEST / variant)
+        for variant in ATTACKS:
+            if wrong_solution_file(variant, ATTACKING).stem == exercise:
+                (wrong / variant).symlink_to(ATTACKING / variant)
         runs.append((wrong, ("--exercise", exercise)))
     loops = folder / "loops"
-    for name, source in (("loops_stubbornly", STUBBORN_LOOP), ("loops_plainly", PLAIN_LOOP)):
+    for name, source in (
+        ("loops_stubbornly", STUBBORN_LOOP),
+        ("loops_plainly", PLAIN_LOOP),
+        ("loops_at_import", LOOP_AT_IMPORT),
+    ):
         (loops / name).mkdir(parents=True)
         (loops / name / "ex01_velocity_keypoints.py").write_text(source)
     (loops / "loops_stubbornly" / "ex02_element_sampling.py").symlink_to(
@@ -196,6 +217,14 @@ def test_cheating_solution_scores_zero_with_a_message(grades, variant):
     assert forbidden and "existing implementation" in forbidden[0], result["messages"]
 
 
+@pytest.mark.parametrize("variant", ATTACKS)
+def test_attack_on_the_grader_scores_at_most_a_quarter(grades, variant):
+    exercise = wrong_solution_file(variant, ATTACKING).stem
+    result = grades[variant][exercise]
+    assert result["total"] > 0 and result["passed"] <= result["total"] / 4, (result["status"], result["tests"])
+    assert result["score"] <= 0.25 * result["max_score"], result
+
+
 @pytest.mark.parametrize("variant", HONEST_VARIANTS)
 def test_honest_solution_using_other_toolimit_names_is_not_refused(grades, variant):
     exercise = wrong_solution_file(variant, HONEST).stem
@@ -216,12 +245,15 @@ def test_untouched_stub_is_one_line_not_attempted(grades):
 
 def test_an_endless_loop_costs_only_its_exercise(grades):
     stubborn = grades["loops_stubbornly"]
-    assert stubborn["ex01_velocity_keypoints"]["status"] == "timed out", stubborn["ex01_velocity_keypoints"]
-    assert stubborn["ex01_velocity_keypoints"]["passed"] == 0
-    assert "stopped after 30 s" in stubborn["ex01_velocity_keypoints"]["messages"]["run"]
+    hidden = stubborn["ex01_velocity_keypoints"]  # the student's process is killed 10 s after the call's limit
+    assert hidden["status"] == "graded" and hidden["passed"] == 0 and hidden["score"] == 0, hidden
+    assert hidden["seconds"] < 30 and "did not return within 5 s" in next(iter(hidden["messages"].values()))
     plain = grades["loops_plainly"]["ex01_velocity_keypoints"]
     assert plain["status"] == "graded" and plain["passed"] == 0, plain
     assert plain["seconds"] < 30 and "did not return within 5 s" in next(iter(plain["messages"].values()))
+    at_import = grades["loops_at_import"]["ex01_velocity_keypoints"]
+    assert at_import["status"] == "timed out" and at_import["score"] == 0, at_import
+    assert "stopped after 30 s" in at_import["messages"]["run"]
     other = stubborn["ex02_element_sampling"]
     assert other["status"] == "graded" and other["passed"] == other["total"] > 0, other["messages"]
 
@@ -253,12 +285,30 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     files = {path.relative_to(out).as_posix() for path in out.rglob("*") if path.is_file()}
-    assert {"README.md", "grade.py", "graders/conftest.py", "graders/grading.py"} <= files
+    assert {"README.md", "grade.py", "graders/conftest.py", "graders/grading.py", "requirements.txt"} <= files
+    (wheel,) = out.glob("toolimit-*.whl")
+    assert f"./{wheel.name}[course]" in (out / "requirements.txt").read_text()
     assert {f"exercises/{exercise}.py" for exercise in EXERCISES} <= files
     assert {f"graders/test_{exercise}.py" for exercise in EXERCISES} <= files
     solutions = {path.read_bytes() for path in (COURSE / "solutions").glob("*.py")}
     assert not any("solution" in name for name in files), files
     assert not any((out / name).read_bytes() in solutions for name in files)
+    notebooks = sorted(out.glob("notebooks/*.ipynb"))
+    assert [path.name[:2] for path in notebooks] == ["01", "02", "03", "04", "05", "06"]
+    assert (out / "notebook_checks.py").is_file() and (out / "data" / "demos" / "spade_00.npz").is_file()
+    for path in notebooks:
+        handed_out = json.loads(path.read_text())
+        code = ["".join(cell["source"]) for cell in handed_out["cells"] if cell["cell_type"] == "code"]
+        assert not any("SOLUTION" in source for source in code), path.name
+        assert any('raise NotImplementedError("exercise: write this part")' in source for source in code)
+        assert all(not cell.get("outputs") for cell in handed_out["cells"] if cell["cell_type"] == "code")
+        source = json.loads((REPO / "notebooks" / path.name).read_text())
+        for cell in source["cells"]:
+            text = "".join(cell["source"])
+            if "### BEGIN SOLUTION" in text:
+                answer = text.split("### BEGIN SOLUTION")[1].split("### END SOLUTION")[0]
+                lines = [line.strip() for line in answer.splitlines() if len(line.strip()) > 25]
+                assert lines and not any(line in "".join(code) for line in lines), path.name
     again = subprocess.run(
         [sys.executable, str(COURSE / "grade.py"), "bundle", str(out)],
         cwd=REPO,
@@ -280,7 +330,7 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
     assert check.stdout.split() == ["ex05_ppo_objective", "not", "attempted"], check.stdout
     bare = tmp_path / "exam"
     result = subprocess.run(
-        [sys.executable, str(COURSE / "grade.py"), "bundle", str(bare), "--without-graders"],
+        [sys.executable, str(COURSE / "grade.py"), "bundle", str(bare), "--without-graders", "--wheel", str(wheel)],
         cwd=REPO,
         capture_output=True,
         text=True,
@@ -288,5 +338,7 @@ def test_bundle_holds_no_solution_and_checks_itself(tmp_path):
         check=False,
     )
     assert result.returncode == 0, result.stderr
-    assert sorted(path.name for path in bare.iterdir()) == ["README.md", "exercises"]
+    assert sorted(path.name for path in bare.iterdir()) == ["README.md", "exercises", "requirements.txt", wheel.name]
     assert "grade.py check" not in (bare / "README.md").read_text()
+    assert not any("grade.py" in path.read_text() for path in (bare / "exercises").glob("ex*.py"))
+    assert all("scores 0 for the exercise" in path.read_text() for path in (bare / "exercises").glob("ex*.py"))

@@ -10,7 +10,10 @@ CAUGHT_BY = ["test_ex06_intersection_matches_reference", "test_ex06_a_hand_case"
 
 def pixel_rays(K, world_from_camera, pixels):
     pixels = np.asarray(pixels, dtype=float)
-    rays = np.linalg.solve(K, np.column_stack([pixels, np.ones(len(pixels))]).T).T @ np.asarray(world_from_camera)[:3, :3].T
+    rays = (
+        np.linalg.solve(K, np.column_stack([pixels, np.ones(len(pixels))]).T).T
+        @ np.asarray(world_from_camera)[:3, :3].T
+    )
     return rays / np.linalg.norm(rays, axis=1, keepdims=True)
 
 
