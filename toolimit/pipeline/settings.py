@@ -264,6 +264,7 @@ QUICK: dict[str, Any] = {
     "learning.value_steps": 200,
     "learning.clone_rollouts": 2,
     "evaluation.episodes": 4,
+    "export.check_episodes": 4,
 }
 
 
