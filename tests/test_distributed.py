@@ -140,3 +140,38 @@ def test_an_interrupted_reproduction_on_ray_keeps_its_cells_ends_every_process_a
     assert "[trajectory] done earlier" in again.stdout
     cells = json.loads((out / "results.json").read_text())["cells"]
     assert sorted(cell["method"] for cell in cells) == ["final", "tool_only", "trajopt"]
+
+
+@pytest.mark.parametrize("name", ["../outside.txt", "/tmp/toolimit-absolute-never.txt", "a/../../outside.txt", "link/x.txt"])
+def test_a_file_returned_by_a_task_is_written_inside_its_folder_or_refused(tmp_path: Path, name: str) -> None:
+    """Names come from tasks run on other nodes: none may write outside the experiment's folder,
+    and a refused set writes nothing."""
+    from toolimit.distributed import write_files
+    from toolimit.errors import InputError
+
+    root, outside = tmp_path / "root", tmp_path / "elsewhere"
+    root.mkdir(), outside.mkdir()
+    (root / "link").symlink_to(outside)
+    with pytest.raises(InputError) as error:
+        write_files(root, {"fine.txt": b"1", name: b"planted"})
+    assert "\n" not in str(error.value) and repr(name) in str(error.value)
+    assert not (root / "fine.txt").exists() and not (tmp_path / "outside.txt").exists()
+    assert not list(outside.iterdir()) and not Path("/tmp/toolimit-absolute-never.txt").exists()
+    write_files(root, {"sub/fine.txt": b"1"})
+    assert (root / "sub" / "fine.txt").read_bytes() == b"1"
+
+
+def test_files_sent_to_a_task_stay_inside_their_folder(tmp_path: Path) -> None:
+    from toolimit.distributed import read_files
+    from toolimit.errors import InputError
+
+    root, secret = tmp_path / "root", tmp_path / "secret.txt"
+    (root / "method").mkdir(parents=True)
+    (root / "method" / "task.npz").write_bytes(b"task")
+    secret.write_text("not to be sent")
+    assert read_files(root, ("method", "absent")) == {"method/task.npz": b"task"}
+    (root / "method" / "leak.txt").symlink_to(secret)
+    (root / "linked").symlink_to(tmp_path)
+    for folders in (("method",), ("../secret.txt",), (str(secret),), ("linked",)):
+        with pytest.raises(InputError, match="refused"):
+            read_files(root, folders)

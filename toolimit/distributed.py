@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-from toolimit.artifacts import atomic_path
+from toolimit.artifacts import atomic_path, inside_folder
 from toolimit.errors import InputError
 from toolimit.interrupts import SIGNALS, as_interrupted, starting_processes
 
@@ -243,20 +243,26 @@ Files = dict[str, bytes]
 
 def read_files(root: Path, folders: Iterable[str]) -> Files:
     """Every file under ``root / folder`` for each of ``folders`` (missing ones give nothing),
-    keyed by its path relative to ``root``."""
+    keyed by its path relative to ``root``. InputError (one line) for a folder or file whose path
+    leaves ``root`` (absolute, ``..``, a symbolic link out): nothing outside is read or sent."""
     files: Files = {}
+    source, resolved_root = f"files to send from {root}", root.resolve()
     for folder in folders:
-        base = root / folder
+        base = inside_folder(root, folder, source)
         paths = [base] if base.is_file() else sorted(p for p in base.rglob("*") if p.is_file())
         for path in paths:
-            files[path.relative_to(root).as_posix()] = path.read_bytes()
+            name = path.relative_to(resolved_root).as_posix()
+            files[name] = inside_folder(root, name, source).read_bytes()
     return files
 
 
 def write_files(root: Path, files: Files) -> None:
-    """Write ``files`` under ``root``, each to a temporary name renamed when complete."""
+    """Write ``files`` under ``root``, each to a temporary name renamed when complete. InputError
+    (one line, nothing written) when a name leaves ``root`` (absolute, ``..``, through a symbolic
+    link): names come from tasks run elsewhere."""
+    targets = {name: inside_folder(root, name, f"a file returned by a task for {root}") for name in files}
     for name, data in files.items():
-        with atomic_path(root / name) as tmp:
+        with atomic_path(targets[name]) as tmp:
             tmp.write_bytes(data)
 
 
