@@ -203,6 +203,15 @@ def main(argv: list[str] | None = None) -> int:
     except (ToolimitError, OSError) as error:
         print(f"toolimit {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except MemoryError:  # the sizes asked for (frames, rates, budgets) need more memory than there is
+        print(
+            f"toolimit {args.command}: error: out of memory: the values given ask for more than this machine holds",
+            file=sys.stderr,
+        )
+        return 2
+    except OverflowError as error:  # a value given too large for the arithmetic it enters
+        print(f"toolimit {args.command}: error: a value given is too large ({error})", file=sys.stderr)
+        return 2
     finally:
         if argv is None:
             interrupts.ending()

@@ -380,7 +380,6 @@ def _learn_policy(
     if config.adr:  # a scene without a goal box to move is refused before anything is written
         goal_box_spec(make_scene(task.tool, task.world))
     torch.manual_seed(config.seed)
-    task.save(out_dir / TASK_NPZ)
     scene_kwargs = config.simulation_kwargs(task)
     env = BatchedTaskVecEnv(
         task,
@@ -408,6 +407,7 @@ def _learn_policy(
     except BaseException:  # a refused checkpoint or clone: the simulation's workers end here too
         env.close()
         raise
+    task.save(out_dir / TASK_NPZ)  # once the checkpoint is accepted: a refused resume writes nothing
     curve = out_dir / CURVE_JSONL
     lines = _truncate_curve(curve, model.num_timesteps)
     checked = config.early_stop and not config.adr

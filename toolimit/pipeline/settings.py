@@ -140,6 +140,14 @@ class EvaluationSettings:
         _check_integer("seed", self.seed, 0)
 
 
+#: The command rates (Hz) an export may have: from 1 Hz to 10 kHz (Franka's FCI takes 1 kHz; a
+#: robot's servo loop runs at a few kHz at most). Beyond, ``--rate 1e15`` asks for petabytes.
+MIN_RATE_HZ, MAX_RATE_HZ = 1.0, 10_000.0
+#: The most pieces per step between optimised samples: beyond a hundred the path no longer changes
+#: and only the retiming's work grows.
+MAX_SUBDIVISIONS = 100
+
+
 @dataclass(frozen=True)
 class ExportSettings:
     """Export of a joint path for a real robot (``toolimit export``).
@@ -154,9 +162,14 @@ class ExportSettings:
     subdivisions: int = DEFAULT_SUBDIVISIONS
 
     def __post_init__(self) -> None:
-        if not 0 < self.rate < float("inf"):
-            raise InvalidSetting("rate", f"must be a positive number of Hz, got {self.rate}")
+        if not MIN_RATE_HZ <= self.rate <= MAX_RATE_HZ:
+            raise InvalidSetting(
+                "rate",
+                f"must be between {MIN_RATE_HZ:g} and {MAX_RATE_HZ:g} Hz (a robot's command rate), got {self.rate}",
+            )
         _check_integer("subdivisions", self.subdivisions, 1)
+        if self.subdivisions > MAX_SUBDIVISIONS:
+            raise InvalidSetting("subdivisions", f"must be at most {MAX_SUBDIVISIONS}, got {self.subdivisions}")
 
 
 @dataclass(frozen=True)
