@@ -60,6 +60,11 @@ def _running(pid: int) -> bool:
         return False
 
 
+#: How long (s) a process may take to end before a test calls it stuck: generous, so that a busy
+#: machine (other work on every core) does not fail a test that checks *that* it ends.
+ENDING_BOUND_S = 60.0
+
+
 def _command_line(pid: int) -> bytes:
     """Process ``pid``'s command line (Linux /proc), empty once it has ended."""
     try:
@@ -72,7 +77,8 @@ def _command_line(pid: int) -> bytes:
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
 def test_workers_end_when_their_parent_dies_without_cleaning_up(tmp_path: Path, signum: int) -> None:
     """A script that installed no handler dies at once on SIGTERM, as on SIGKILL: its workers, which
-    would wait on the task queue for ever, end within half a second."""
+    would wait on the task queue for ever, end. The bound is generous (a busy machine may delay
+    them): the test checks that they end; they check their parent every PARENT_CHECK_S s."""
     script = tmp_path / "parent.py"
     script.write_text(
         textwrap.dedent("""
@@ -99,11 +105,11 @@ def test_workers_end_when_their_parent_dies_without_cleaning_up(tmp_path: Path, 
         assert len(workers) == 2, "the two workers did not start"
         time.sleep(3 * PARENT_CHECK_S)  # their watch has started
         os.kill(parent.pid, signum)
-        parent.wait(timeout=5)
+        parent.wait(timeout=ENDING_BOUND_S)
         died = time.monotonic()
-        while any(_running(pid) for pid in workers) and time.monotonic() - died < 0.5:
+        while any(_running(pid) for pid in workers) and time.monotonic() - died < ENDING_BOUND_S:
             time.sleep(0.02)
-        assert not [pid for pid in workers if _running(pid)], "a worker outlived its parent by 0.5 s"
+        assert not [pid for pid in workers if _running(pid)], f"a worker outlived its parent by {ENDING_BOUND_S} s"
     finally:
         if parent.poll() is None:
             parent.kill()

