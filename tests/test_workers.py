@@ -12,6 +12,7 @@ import threading
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 
 from toolimit.workers import PARENT_CHECK_S, cores_given, ordered_results, usable_cpus
@@ -52,11 +53,12 @@ def test_the_cores_given_follow_omp_num_threads(monkeypatch: pytest.MonkeyPatch,
     assert cores_given() == (cores or usable_cpus())
 
 
-def _running(pid: int) -> bool:
-    """Whether process ``pid`` exists and is not a zombie (Linux /proc)."""
+def _running(process: psutil.Process) -> bool:
+    """Whether ``process`` still runs: not ended, not a zombie, and not another process that was
+    given its pid since (a busy machine reuses pids within the generous bounds of these tests)."""
     try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
+        return process.is_running() and process.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
         return False
 
 
@@ -103,13 +105,14 @@ def test_workers_end_when_their_parent_dies_without_cleaning_up(tmp_path: Path, 
             workers = [int(pid) for pid in children if b"spawn_main" in _command_line(int(pid))]
             time.sleep(0.05)
         assert len(workers) == 2, "the two workers did not start"
+        watched = [psutil.Process(pid) for pid in workers]
         time.sleep(3 * PARENT_CHECK_S)  # their watch has started
         os.kill(parent.pid, signum)
         parent.wait(timeout=ENDING_BOUND_S)
         died = time.monotonic()
-        while any(_running(pid) for pid in workers) and time.monotonic() - died < ENDING_BOUND_S:
+        while any(_running(worker) for worker in watched) and time.monotonic() - died < ENDING_BOUND_S:
             time.sleep(0.02)
-        assert not [pid for pid in workers if _running(pid)], f"a worker outlived its parent by {ENDING_BOUND_S} s"
+        assert not [w.pid for w in watched if _running(w)], f"a worker outlived its parent by {ENDING_BOUND_S} s"
     finally:
         if parent.poll() is None:
             parent.kill()

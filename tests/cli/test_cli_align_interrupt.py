@@ -16,6 +16,7 @@ import threading
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads child processes from /proc")
@@ -34,10 +35,12 @@ def _children(pid: int) -> list[int]:
         return []
 
 
-def _running(pid: int) -> bool:
+def _running(process: psutil.Process) -> bool:
+    """Whether ``process`` still runs: not ended, not a zombie, and not another process that was
+    given its pid since (a busy machine reuses pids within the generous bounds of these tests)."""
     try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
+        return process.is_running() and process.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
         return False
 
 
@@ -67,15 +70,15 @@ def test_an_interrupt_ends_every_process(repo_root, tmp_path, signum, to_group, 
             if len(_children(process.pid)) >= 2 and (not after_progress or (done and int(done[-1]) > 0)):
                 break
             time.sleep(0.02)
-        processes = [process.pid, *_children(process.pid)]
+        processes = [psutil.Process(pid) for pid in (process.pid, *_children(process.pid))]
         assert process.poll() is None and len(processes) >= 3, bytes(stderr).decode()
         for _ in range(count):
             os.killpg(process.pid, signum) if to_group else os.kill(process.pid, signum)
             time.sleep(0.1)
         sent = time.monotonic() - 0.1 * count
-        while any(_running(pid) for pid in processes) and time.monotonic() - sent < ENDING_BOUND_S:
+        while any(_running(p) for p in processes) and time.monotonic() - sent < ENDING_BOUND_S:
             time.sleep(0.02)
-        assert not [pid for pid in processes if _running(pid)], f"processes still running {ENDING_BOUND_S} s after the signal"
+        assert not [p.pid for p in processes if _running(p)], f"processes still running {ENDING_BOUND_S} s after the signal"
         code = process.wait(timeout=ENDING_BOUND_S)
     finally:
         if process.poll() is None:
