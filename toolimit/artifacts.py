@@ -41,6 +41,23 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         tmp.unlink(missing_ok=True)
 
 
+def inside_folder(folder: str | os.PathLike[str], name: Any, source: str) -> Path:
+    """``folder / name`` for a ``name`` read from a file in ``folder`` or returned by a task
+    (``source`` says which, for the message): a relative path without ``..`` that stays inside
+    ``folder`` once symbolic links are followed. InputError otherwise: a planted name must neither
+    read nor write nor delete anything outside the folder."""
+    if not isinstance(name, str) or not name or "\0" in name:
+        raise InputError(f"{source}: {name!r} is not a file name")
+    relative = Path(name)
+    if relative.is_absolute() or ".." in relative.parts:
+        raise InputError(f"{source}: {name!r} leaves the folder {folder} (absolute or with ..); refused")
+    root = Path(folder).resolve()
+    path = root / relative
+    if not path.resolve().is_relative_to(root):
+        raise InputError(f"{source}: {name!r} leads outside the folder {folder} through a symbolic link; refused")
+    return path
+
+
 def _current_umask() -> int:
     mask = os.umask(0)
     os.umask(mask)

@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import contextlib
 import ipaddress
+import logging
 import os
 import signal
+import socket
 import tempfile
 import threading
 import time
@@ -30,7 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-from toolimit.artifacts import atomic_path
+from toolimit.artifacts import atomic_path, inside_folder
 from toolimit.errors import InputError
 from toolimit.interrupts import SIGNALS, as_interrupted, starting_processes
 
@@ -44,8 +46,17 @@ Result = TypeVar("Result")
 CANCEL_GRACE_S = 30.0
 #: Tasks queued per actor ahead of the consumer (as :mod:`toolimit.workers` does per process).
 QUEUED_PER_ACTOR = 2
+#: How long (s) a cluster's address gets to accept a connection before ``--ray ADDRESS`` gives up:
+#: Ray itself retries an address that does not answer for minutes.
+CONNECT_TIMEOUT_S = 10.0
+#: How long (s) joining a cluster that accepted the connection may take before it is given up.
+JOIN_TIMEOUT_S = 30.0
 #: The environment of the private Ray's processes: loopback node IP, no usage statistics.
 PRIVATE_ENVIRONMENT = {"RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_USAGE_STATS_ENABLED": "0"}
+
+
+class RayUnreachable(InputError):
+    """``--ray ADDRESS`` where no cluster answers."""
 
 
 class RayMissing(InputError):
@@ -110,10 +121,11 @@ def ray_cluster(target: RayTarget = True, cpus: int | None = None) -> Iterator[C
         return
     address = target if isinstance(target, str) else os.environ.get("RAY_ADDRESS") or None
     if address is not None:
+        check_reachable(address)
         # Ray turns a loopback address into this machine's IP unless in its single-machine mode
         on_loopback = loopback_environment() if _is_loopback(address) else contextlib.nullcontext()
         with on_loopback, _keeping_signal_handlers():
-            ray.init(address=address, log_to_driver=False, configure_logging=False)
+            _join_within(address, JOIN_TIMEOUT_S)
         try:
             yield Cluster(address, private=False)
         finally:
@@ -132,6 +144,62 @@ def ray_cluster(target: RayTarget = True, cpus: int | None = None) -> Iterator[C
         yield Cluster(context.address_info["address"], private=True)
     finally:
         ray.shutdown()
+
+
+def _join_within(address: str, timeout_s: float) -> None:
+    """``ray.init(address)`` within ``timeout_s`` seconds, else :class:`RayUnreachable`. Ray's
+    connection waits in its C++ core, where this process's signal handlers do not run: it is made
+    in a daemon thread while the main thread waits, so that SIGINT and SIGTERM still stop the run
+    (:mod:`toolimit.interrupts`) and a cluster that accepts connections but never answers as Ray
+    gives up in bounded time."""
+    ray = require_ray()
+    failure: list[BaseException] = []
+
+    def join() -> None:
+        try:
+            ray.init(address=address, log_to_driver=False, configure_logging=False)
+        except BaseException as error:  # handed to the main thread
+            failure.append(error)
+
+    # Ray's note that a thread sets no SIGTERM handler is this design's point: errors only while joining
+    logger, level = logging.getLogger("ray"), logging.getLogger("ray").level
+    logger.setLevel(logging.ERROR)
+
+    thread = threading.Thread(target=join, name="toolimit-ray-join", daemon=True)
+    thread.start()
+    try:
+        thread.join(timeout_s)
+    finally:
+        logger.setLevel(level)
+    if thread.is_alive():
+        raise RayUnreachable(
+            f"--ray {address}: no Ray cluster answered there within {timeout_s:g} s; check the address"
+        )
+    if failure:
+        error = failure[0]
+        raise RayUnreachable(
+            f"--ray {address}: cannot join the Ray cluster there ({type(error).__name__}: {error})".splitlines()[0]
+        ) from None
+
+
+def check_reachable(address: str, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
+    """:class:`RayUnreachable` (one line) unless the cluster address ``host:port`` (or
+    ``ray://host:port``) accepts a connection within ``timeout_s`` seconds: Ray's own
+    ``ray.init`` retries for minutes with warnings of its own. Other forms are left to Ray."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            pass
+    except OSError as error:
+        reason = (
+            f"no answer within {timeout_s:g} s" if isinstance(error, TimeoutError) else error.strerror or str(error)
+        )
+        raise RayUnreachable(
+            f"--ray {address}: no Ray cluster answers there ({reason}); "
+            "check the address, or start the cluster with `ray start --head`"
+        ) from None
 
 
 def _is_loopback(address: str) -> bool:
@@ -243,20 +311,26 @@ Files = dict[str, bytes]
 
 def read_files(root: Path, folders: Iterable[str]) -> Files:
     """Every file under ``root / folder`` for each of ``folders`` (missing ones give nothing),
-    keyed by its path relative to ``root``."""
+    keyed by its path relative to ``root``. InputError (one line) for a folder or file whose path
+    leaves ``root`` (absolute, ``..``, a symbolic link out): nothing outside is read or sent."""
     files: Files = {}
+    source, resolved_root = f"files to send from {root}", root.resolve()
     for folder in folders:
-        base = root / folder
+        base = inside_folder(root, folder, source)
         paths = [base] if base.is_file() else sorted(p for p in base.rglob("*") if p.is_file())
         for path in paths:
-            files[path.relative_to(root).as_posix()] = path.read_bytes()
+            name = path.relative_to(resolved_root).as_posix()
+            files[name] = inside_folder(root, name, source).read_bytes()
     return files
 
 
 def write_files(root: Path, files: Files) -> None:
-    """Write ``files`` under ``root``, each to a temporary name renamed when complete."""
+    """Write ``files`` under ``root``, each to a temporary name renamed when complete. InputError
+    (one line, nothing written) when a name leaves ``root`` (absolute, ``..``, through a symbolic
+    link): names come from tasks run elsewhere."""
+    targets = {name: inside_folder(root, name, f"a file returned by a task for {root}") for name in files}
     for name, data in files.items():
-        with atomic_path(root / name) as tmp:
+        with atomic_path(targets[name]) as tmp:
             tmp.write_bytes(data)
 
 

@@ -74,7 +74,7 @@ def ordered_results(
         return
     context = multiprocessing.get_context("spawn")
     executor = ProcessPoolExecutor(
-        workers, mp_context=context, initializer=_start_worker, initargs=(initializer, initargs)
+        workers, mp_context=context, initializer=_start_worker, initargs=(os.getpid(), initializer, initargs)
     )
     pending: list[Future[Result]] = []
     finished = False
@@ -97,23 +97,25 @@ def ordered_results(
             stop_workers(executor)
 
 
-def _start_worker(initializer: Callable[..., None] | None, initargs: tuple[Any, ...]) -> None:
+def _start_worker(parent: int, initializer: Callable[..., None] | None, initargs: tuple[Any, ...]) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C to the process group is the parent's to handle
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # ignored now: no need to keep it blocked
-    _exit_with_parent()
+    _exit_with_parent(parent)
     if initializer is not None:
         initializer(*initargs)
 
 
-def _exit_with_parent() -> None:
-    """End this worker within :data:`PARENT_CHECK_S` of its parent's death, however the parent died.
+def _exit_with_parent(parent: int) -> None:
+    """End this worker within :data:`PARENT_CHECK_S` of the death of its parent (process id
+    ``parent``, given by the parent itself), however the parent died.
 
     A parent that cannot clean up (SIGTERM to a script that installed no handler, SIGKILL, a crash)
     would otherwise leave its workers waiting on the task queue for ever: they hold its write end
     themselves, so it never reports the end of the input. A daemon thread watches the parent id,
-    which changes when the process is re-parented.
+    which changes when the process is re-parented. The id is the one the parent gave, not this
+    process's parent at the time the watch starts: on a busy machine a worker may still be starting
+    (importing) when its parent dies, and would then watch its new parent.
     """
-    parent = os.getppid()
 
     def watch() -> None:
         while os.getppid() == parent:

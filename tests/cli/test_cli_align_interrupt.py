@@ -1,5 +1,5 @@
-"""`toolimit align` stopped by real signals on a real worker pool: every process ends within 2 s,
-exit code 130 (SIGINT) / 143 (SIGTERM), no traceback, a true message, the checkpoint written when
+"""`toolimit align` stopped by real signals on a real worker pool: every process ends (within a
+generous bound: how fast is not a test's figure, a busy machine may delay it), exit code 130 (SIGINT) / 143 (SIGTERM), no traceback, a true message, the checkpoint written when
 samples finished. The command runs in its own session so that the signal can go to its whole
 process group (what Ctrl-C, `timeout -s INT` and job controllers do) or to the main process only."""
 
@@ -16,9 +16,16 @@ import threading
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads child processes from /proc")
+
+
+#: How long (s) the processes may take to end after the signal before the test calls them stuck.
+ENDING_BOUND_S = 60.0
+#: How long (s) the command may take to start its workers (and finish samples) on a busy machine.
+STARTING_BOUND_S = 300.0
 
 
 def _children(pid: int) -> list[int]:
@@ -28,10 +35,12 @@ def _children(pid: int) -> list[int]:
         return []
 
 
-def _running(pid: int) -> bool:
+def _running(process: psutil.Process) -> bool:
+    """Whether ``process`` still runs: not ended, not a zombie, and not another process that was
+    given its pid since (a busy machine reuses pids within the generous bounds of these tests)."""
     try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
+        return process.is_running() and process.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
         return False
 
 
@@ -55,22 +64,22 @@ def test_an_interrupt_ends_every_process(repo_root, tmp_path, signum, to_group, 
     reader = threading.Thread(target=lambda: [stderr.extend(b) for b in iter(lambda: process.stderr.read1(4096), b"")])
     reader.start()
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + STARTING_BOUND_S
         while time.monotonic() < deadline and process.poll() is None:  # workers started (and samples done)
             done = re.findall(rb"samples=(\d+)/20000", bytes(stderr))
             if len(_children(process.pid)) >= 2 and (not after_progress or (done and int(done[-1]) > 0)):
                 break
             time.sleep(0.02)
-        processes = [process.pid, *_children(process.pid)]
+        processes = [psutil.Process(pid) for pid in (process.pid, *_children(process.pid))]
         assert process.poll() is None and len(processes) >= 3, bytes(stderr).decode()
         for _ in range(count):
             os.killpg(process.pid, signum) if to_group else os.kill(process.pid, signum)
             time.sleep(0.1)
         sent = time.monotonic() - 0.1 * count
-        while any(_running(pid) for pid in processes) and time.monotonic() - sent < 2.0:
+        while any(_running(p) for p in processes) and time.monotonic() - sent < ENDING_BOUND_S:
             time.sleep(0.02)
-        assert not [pid for pid in processes if _running(pid)], "processes still running 2 s after the signal"
-        code = process.wait(timeout=1)
+        assert not [p.pid for p in processes if _running(p)], f"processes still running {ENDING_BOUND_S} s after the signal"
+        code = process.wait(timeout=ENDING_BOUND_S)
     finally:
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)

@@ -113,7 +113,7 @@ def test_pickle_with_code_is_refused(tmp_path):
     [
         ({"fps": None}, "missing key 'fps'"),
         ({"keypoint_3d_positions_object": None}, "missing key 'keypoint_3d_positions_object'"),
-        ({"fps": -3}, "key 'fps' must be a positive number"),
+        ({"fps": -3}, "key 'fps' must be between 1 and 1000 frames per second"),
         (
             {"keypoint_3d_positions_object": np.zeros((5, N))},
             r"'keypoint_3d_positions_object' must have shape \(6, nf\), got \(5, 40\)",

@@ -87,7 +87,7 @@ def test_unknown_keys(tmp_path):
         ({"tool": None}, "missing key 'tool'"),
         ({"head": np.zeros((30, 2))}, r"key 'head' must have shape \(T, 3\), got \(30, 2\)"),
         ({"fps": np.array([24.0, 24.0])}, "key 'fps' must be a numeric scalar"),
-        ({"fps": -1.0}, "key 'fps' must be a positive number"),
+        ({"fps": -1.0}, "key 'fps' must be between 1 and 1000 frames per second"),
         ({"tool": np.array([1, 2])}, "key 'tool' must be a string scalar"),
         ({"handle": np.zeros((20, 3))}, r"head \(30, 3\) and handle \(20, 3\) have different shapes"),
         ({"head": np.array(["a"] * 90).reshape(30, 3)}, "key 'head' must be numeric"),

@@ -154,5 +154,5 @@ def test_determinism_and_variety():
 def test_bad_arguments():
     with pytest.raises(DemoError, match="no synthetic demonstrations for 'rake'"):
         synthesize_demo("rake", 0)
-    with pytest.raises(DemoError, match="fps must be positive"):
+    with pytest.raises(DemoError, match="fps: must be between 1 and 1000"):
         synthesize_demo("spade", 0, fps=0)

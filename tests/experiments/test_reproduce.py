@@ -255,7 +255,7 @@ def test_a_two_node_ray_cluster_measures_the_cells_of_a_local_run(
         np.testing.assert_allclose(on_ray.goal_rewards, alone.goal_rewards, rtol=1e-6, atol=1e-6)
         assert (on_ray.success_rate, on_ray.env_steps) == (alone.success_rate, alone.env_steps)
     assert "/tmp/toolimit-task-" not in said  # the lines name the driver's folders
-    assert (out / EXPERIMENT / "lfd" / "learning" / "policy.zip").is_file()  # the tasks' files came back
+    assert (out / EXPERIMENT / "lfd" / "learning" / "policy.safetensors").is_file()  # the tasks' files came back
     assert (out / EXPERIMENT / "method" / "evaluation.json").is_file()
 
 

@@ -389,7 +389,7 @@ def test_a_policy_that_observed_the_box_in_world_metres_is_refused_in_one_line(s
     monkeypatch.undo()
     with pytest.raises(InputError, match="observes the goal box in world metres") as error:
         load_policy(tmp_path)
-    assert str(tmp_path / "policy.zip") in str(error.value) and "\n" not in str(error.value)
+    assert str(tmp_path / "policy.safetensors") in str(error.value) and "\n" not in str(error.value)
 
 
 def test_heat_map_values_come_from_rollouts_and_the_svg_has_one_cell_per_grid_point(spade_task, cloned_adr_policy):

@@ -165,14 +165,14 @@ def test_the_run_keeps_its_best_checked_policy_and_continues_from_its_last(spade
     assert kept["best_check"]["success_rate"] == 1.0
     assert kept["selection"]["best_check"]["success_rate"] == 0.9
     assert kept["selection"]["last_update"]["success_rate"] == 0.6
-    assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{4 * per_update}.zip"}
+    assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{4 * per_update}.safetensors"}
     # the kept policy is the 4th update's, as a run of four updates without checks has it
     four = learn_policy(spade_task, tmp_path / "four", _config(**{**config.__dict__, "timesteps": 4 * per_update,
                                                                    "early_stop": False}), progress=False)
     np.testing.assert_allclose(_parameters(outcome.model), _parameters(four.model), rtol=0, atol=1e-6)
     six = learn_policy(spade_task, tmp_path / "six", _config(**{**config.__dict__, "early_stop": False}), progress=False)
     assert not np.allclose(_parameters(outcome.model), _parameters(six.model))
-    assert json.loads((tmp_path / "run" / "checkpoint.json").read_text())["model"] == "checkpoint.zip"
+    assert json.loads((tmp_path / "run" / "checkpoint.json").read_text())["model"] == "checkpoint.safetensors"
     # a larger budget continues from the last update, not from the kept policy; a later check at
     # the kept one's success (checks after updates 6 and 7: 0.0, 1.0) takes its place
     monkeypatch.setattr("toolimit.learn.early_stop.rollout", _ScriptedChecks([0.0, 1.0]))
@@ -184,7 +184,7 @@ def test_the_run_keeps_its_best_checked_policy_and_continues_from_its_last(spade
     seven = learn_policy(spade_task, tmp_path / "seven", _config(**{**config.__dict__, "timesteps": 7 * per_update,
                                                                      "early_stop": False}), progress=False)
     np.testing.assert_allclose(_parameters(longer.model), _parameters(seven.model), rtol=0, atol=1e-6)
-    assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{7 * per_update}.zip"}
+    assert {p.name for p in (tmp_path / "run").glob("best*")} == {"best.json", f"best-{7 * per_update}.safetensors"}
 
 
 @pytest.mark.parametrize("selection", [(0.6, 0.9), (0.75, 0.75)], ids=["last-does-better", "equal"])
@@ -226,4 +226,4 @@ def test_without_keep_best_the_run_is_its_last_update(spade_task, tmp_path, monk
     config = _config(timesteps=2 * per_update, clone_steps=20, keep_best=False, stop=StopRule(every=1, episodes=2, held=9))
     outcome = learn_policy(spade_task, tmp_path, config, progress=False)
     assert "kept_policy" not in outcome.record and not list(tmp_path.glob("best*"))
-    assert json.loads((tmp_path / "checkpoint.json").read_text())["model"] == "policy.zip"
+    assert json.loads((tmp_path / "checkpoint.json").read_text())["model"] == "policy.safetensors"

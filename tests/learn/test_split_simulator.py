@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import psutil
 import pytest
 
 from toolimit.learn import BatchedTaskVecEnv, shipped_task
@@ -106,20 +107,21 @@ STEPPING = textwrap.dedent(
 )
 
 
-def alive(pid: int) -> bool:
-    """Whether ``pid`` runs (a zombie, ended but not yet reaped by its parent, does not)."""
+def alive(process: psutil.Process) -> bool:
+    """Whether ``process`` runs: not ended, not a zombie (ended but not yet reaped by its parent),
+    and not another process given its pid since (a busy machine reuses pids within 60 s)."""
     try:
-        with open(f"/proc/{pid}/stat") as handle:
-            return handle.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
+        return process.is_running() and process.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
         return False
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum, tmp_path):
     """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) or SIGTERM to the main
-    process: the worker and multiprocessing's resource tracker end within 0.5 s of the main
-    process, and the shared buffer's file is gone."""
+    process: the worker and multiprocessing's resource tracker end after the main process (within a
+    generous 60 s: the test checks that they end, a busy machine may delay them), and the shared
+    buffer's file is gone."""
     environment = {**os.environ, "PYTHONPATH": str(REPO)}
     stderr = tmp_path / "stderr.txt"
     main = subprocess.Popen(
@@ -131,8 +133,8 @@ def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum, tmp_path):
         start_new_session=True,
     )
     try:
-        children = [int(pid) for pid in main.stdout.readline().split()]  # type: ignore[union-attr]
-        assert len(children) == 2 and all(alive(pid) for pid in children)
+        children = [psutil.Process(int(pid)) for pid in main.stdout.readline().split()]  # type: ignore[union-attr]
+        assert len(children) == 2 and all(alive(child) for child in children)
         time.sleep(0.2)  # stepping
         if signum == signal.SIGINT:
             os.killpg(main.pid, signum)
@@ -145,9 +147,9 @@ def test_a_stopped_run_leaves_no_process_nor_shared_memory(signum, tmp_path):
             time.sleep(1.0)
             pytest.fail(f"the main process did not end within 60 s of the signal; its stacks:\n{stderr.read_text()}")
         ended = time.monotonic()
-        while any(alive(pid) for pid in children) and time.monotonic() - ended < 0.5:
+        while any(alive(child) for child in children) and time.monotonic() - ended < 60:
             time.sleep(0.01)
-        assert not [pid for pid in children if alive(pid)], "a child outlived the main process by 0.5 s"
+        assert not [child.pid for child in children if alive(child)], "a child outlived the main process by 60 s"
         assert not glob.glob(os.path.join(SHARED_DIR, f"toolimit-{main.pid}-*"))
     finally:
         if main.poll() is None:

@@ -38,11 +38,11 @@ def test_files_and_record(spade_task, tmp_path):
     horizon = spade_task.horizon
     config = LearningConfig(**{**TINY.__dict__, "timesteps": 2 * horizon * 2})
     outcome = learn_policy(spade_task, tmp_path, config, progress=False)
-    for name in ("task.npz", "cloning.json", "checkpoint.json", "policy.zip", "learning.json", CURVE_JSONL):
+    for name in ("task.npz", "cloning.json", "checkpoint.json", "policy.safetensors", "learning.json", CURVE_JSONL):
         assert (tmp_path / name).is_file(), name
-    # the last update's model stays the checkpoint; policy.zip is the best check's, here (no check
+    # the last update's model stays the checkpoint; policy.safetensors is the best check's, here (no check
     # in two updates) the last update's (tests/learn/test_early_stop.py: the kept policy)
-    assert json.loads((tmp_path / "checkpoint.json").read_text())["model"] == "checkpoint.zip"
+    assert json.loads((tmp_path / "checkpoint.json").read_text())["model"] == "checkpoint.safetensors"
     record = json.loads((tmp_path / "learning.json").read_text())
     assert record["ppo_env_steps"] == 2 * horizon * 2
     assert record["cloning_env_steps"] == (2 + CLONE_CHECK_EPISODES) * horizon, "the rollouts, then the clone's check"
@@ -73,7 +73,7 @@ def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         learn_policy(spade_task, tmp_path / "split", three, on_record=stop, progress=False)
-    assert (tmp_path / "split" / "checkpoint.zip").is_file() and not (tmp_path / "split" / "policy.zip").exists()
+    assert (tmp_path / "split" / "checkpoint.safetensors").is_file() and not (tmp_path / "split" / "policy.safetensors").exists()
     started = time.perf_counter()
     resumed = learn_policy(spade_task, tmp_path / "split", three, progress=False)
     second_sitting_s = time.perf_counter() - started
@@ -86,7 +86,7 @@ def test_an_interrupted_run_resumes_exactly(spade_task, tmp_path):
 
 
 def test_a_finished_run_continues_to_a_larger_budget_exactly(spade_task, tmp_path):
-    """One update, finished (its final checkpoint is policy.zip), then run to three: as in one go."""
+    """One update, finished (its final checkpoint is policy.safetensors), then run to three: as in one go."""
     per_update = spade_task.horizon * 2
     three = LearningConfig(**{**TINY.__dict__, "timesteps": 3 * per_update})
     whole = learn_policy(spade_task, tmp_path / "whole", three, progress=False)

@@ -136,6 +136,8 @@ def add_out_argument(parser: argparse.ArgumentParser, what: str = "output folder
 
 def add_ray_argument(parser: argparse.ArgumentParser, what: str) -> None:
     """``--ray [ADDRESS]``: ``what`` on a Ray cluster (:data:`toolimit.distributed.RayTarget`)."""
+    from toolimit.distributed import CONNECT_TIMEOUT_S, JOIN_TIMEOUT_S
+
     parser.add_argument(
         "--ray",
         nargs="?",
@@ -143,7 +145,11 @@ def add_ray_argument(parser: argparse.ArgumentParser, what: str) -> None:
         default=False,
         metavar="ADDRESS",
         help=f"{what} on a Ray cluster: the one at ADDRESS (e.g. 10.0.0.5:6379), else RAY_ADDRESS's, else a "
-        'private Ray on this machine, on 127.0.0.1 only, for this run (needs pip install "toolimit[ray]")',
+        'private Ray on this machine, on 127.0.0.1 only, for this run (needs pip install "toolimit[ray]"). '
+        "A cluster on a network runs code for anyone who reaches it: start it with token authentication "
+        "(RAY_AUTH_MODE=token on every node and here, the token from `ray get-auth-token --generate` in "
+        "~/.ray/auth_token or RAY_AUTH_TOKEN) on a network you trust. An ADDRESS that does not answer is given up "
+        f"after {CONNECT_TIMEOUT_S + JOIN_TIMEOUT_S:g} s at most",
     )
 
 
@@ -202,6 +208,15 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except (ToolimitError, OSError) as error:
         print(f"toolimit {args.command}: error: {error}", file=sys.stderr)
+        return 2
+    except MemoryError:  # the sizes asked for (frames, rates, budgets) need more memory than there is
+        print(
+            f"toolimit {args.command}: error: out of memory: the values given ask for more than this machine holds",
+            file=sys.stderr,
+        )
+        return 2
+    except OverflowError as error:  # a value given too large for the arithmetic it enters
+        print(f"toolimit {args.command}: error: a value given is too large ({error})", file=sys.stderr)
         return 2
     finally:
         if argv is None:

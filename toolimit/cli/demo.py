@@ -24,6 +24,7 @@ from toolimit.cli import (
     check_writable_folder,
 )
 from toolimit.cli.flags import Flag, add_flags, apply_flags
+from toolimit.demos.tool_demo import frame_rate_problem
 from toolimit.demos.video.lift import HANDLE_HINTS, LiftSettings
 
 if TYPE_CHECKING:
@@ -124,8 +125,8 @@ def run_synth(args: argparse.Namespace) -> int:
 
     check_choice("--tool", args.tool, synthetic_tools(), "tool")
     check_count("--seed", args.seed, minimum=0)
-    if not args.fps > 0:
-        raise CliError(f"--fps: must be positive, got {args.fps}")
+    if problem := frame_rate_problem(args.fps):
+        raise CliError(f"--fps: {problem}")
     if args.out.suffix != ".npz":
         raise CliError(f"--out: expected a .npz file name, got {args.out}")
     check_writable_folder(args.out.parent, "--out")
@@ -198,8 +199,8 @@ def run_lift(args: argparse.Namespace) -> int:
     from toolimit.demos.video.lifted_file import side_summary, write_lifted
 
     check_choice("--tool", args.tool, _tools(), "tool")
-    if not args.fps > 0:
-        raise CliError(f"--fps: must be positive, got {args.fps}")
+    if problem := frame_rate_problem(args.fps):
+        raise CliError(f"--fps: {problem}")
     check_output_file(args.out, "--out", ".npz")
     settings = apply_flags(LiftSettings(), LIFT_FLAGS, args)
     for option, path in (("tracks", args.tracks), ("--camera", args.camera)):

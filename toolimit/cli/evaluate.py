@@ -1,6 +1,8 @@
 """``toolimit evaluate``: roll a learned policy out over many seeds and report its success.
 
-Reads POLICY/policy.zip and POLICY/task.npz (``toolimit learn``'s folder). Writes ``--out``
+Reads POLICY/policy.safetensors and POLICY/task.npz (``toolimit learn``'s folder); a
+stable-baselines3 POLICY/policy.zip (an earlier toolimit's) only with ``--trust-sb3-zip``, since
+loading one unpickles it and can run code. Writes ``--out``
 (default POLICY/evaluation.json): deterministic and stochastic rollouts, each with
 ``success_rate`` (the paper's criterion), ``goal_reward_mean``, ``goal_reward`` per episode and
 ``episodes``. A policy learned with ``--adr`` is evaluated with the goal box at the aligned position.
@@ -37,6 +39,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "evaluate", help="evaluate a learned policy over many seeds", description=__doc__.splitlines()[0]
     )
     parser.add_argument("--policy", required=True, type=Path, help="`toolimit learn` output folder")
+    parser.add_argument(
+        "--trust-sb3-zip",
+        action="store_true",
+        help="read a stable-baselines3 POLICY/policy.zip: its loading unpickles it and CAN RUN CODE; "
+        "only for a file whose author you trust",
+    )
     add_flags(parser, EVALUATION_FLAGS, {"": EvaluationSettings()})
     parser.add_argument("--out", type=Path, default=None, help="JSON report (default: POLICY/evaluation.json)")
     parser.add_argument(
@@ -70,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--grid: must be an integer >= 2, got {args.grid}")
     if args.heat_map_episodes is not None and args.heat_map_episodes < 1:
         raise CliError(f"--heat-map-episodes: must be an integer >= 1, got {args.heat_map_episodes}")
-    evaluation = evaluate_stage(args.policy, settings)
+    evaluation = evaluate_stage(args.policy, settings, args.trust_sb3_zip)
     record = evaluation.record
     if args.heat_map is not None:
         record["heat_map"] = _heat_map(args, evaluation, settings.seed)

@@ -3,7 +3,7 @@
 The task comes from a pipeline run (``--alignment DIR --trajectory DIR``: the outputs of
 ``toolimit align`` and ``toolimit trajopt``), a task file (``--task``), or a registered
 environment's shipped task (``--env toolimit/SpadePlanar-v0``). Writes OUT/task.npz,
-OUT/cloning.json, OUT/curve.jsonl, OUT/checkpoint.*, OUT/policy.zip and OUT/learning.json
+OUT/cloning.json, OUT/curve.jsonl, OUT/checkpoint.*, OUT/policy.safetensors and OUT/learning.json
 (:mod:`toolimit.learn.training`). Interrupted (Ctrl-C: exit 130), the same command resumes from the
 last checkpoint. Exit codes: 0 done, 2 bad input.
 """
@@ -113,7 +113,7 @@ def load_task(args: argparse.Namespace) -> LearningTask:
 
 
 def run(args: argparse.Namespace) -> int:
-    from toolimit.learn.ppo import CHECKPOINT_STATE
+    from toolimit.learn.ppo import CHECKPOINT_STATE, POLICY_MODEL
     from toolimit.learn.training import CURVE_JSONL, learn_policy
 
     learning_config(args)  # checks the flags before any work
@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"{task.robot} {task.tool} ({task.world}): {record['env_steps']} env steps "
         f"({record['cloning_env_steps']} cloning), {record['wall_time_s']:.0f} s "
-        f"({record['simulation_time_s']:.0f} s simulation); wrote {args.out / 'policy.zip'}. "
+        f"({record['simulation_time_s']:.0f} s simulation); wrote {args.out / POLICY_MODEL}. "
         f"Next: toolimit evaluate --policy {args.out}"
     )
     return 0

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from toolimit.demos.tool_demo import ToolDemo, finite_frames
+from toolimit.demos.tool_demo import ToolDemo, finite_frames, frame_rate_problem
 from toolimit.errors import DemoError
 from toolimit.tools import tool_spec
 
@@ -116,8 +116,10 @@ def read_motion_estimate(path: str | Path) -> MotionEstimate:
         if key not in data:
             raise DemoError(f"{path}: missing key {key!r} (keys: {sorted(map(str, data))})")
     fps = np.asarray(data["fps"])
-    if fps.size != 1 or not np.issubdtype(fps.dtype, np.number) or not (np.isfinite(fps.item()) and fps.item() > 0):
-        raise DemoError(f"{path}: key 'fps' must be a positive number, got {data['fps']!r}")
+    if fps.size != 1 or not np.issubdtype(fps.dtype, np.number):
+        raise DemoError(f"{path}: key 'fps' must be a number, got {data['fps']!r}")
+    if problem := frame_rate_problem(fps.item()):
+        raise DemoError(f"{path}: key 'fps' {problem}")
     keypoints = _matrix(path, data, "keypoint_3d_positions_object", 6)
     joints = _matrix(path, data, "joint_3d_positions_person", 3 * N_PERSON_JOINTS)
     if keypoints.shape[1] != joints.shape[1]:

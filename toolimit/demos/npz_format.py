@@ -27,7 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from toolimit.artifacts import atomic_path, load_npz
-from toolimit.demos.tool_demo import ToolDemo, finite_frames
+from toolimit.demos.tool_demo import ToolDemo, finite_frames, frame_rate_problem
 from toolimit.errors import DemoError
 from toolimit.tools import TOOLS, ToolPose, tool_spec
 
@@ -183,8 +183,8 @@ def _fps(path: Path, arrays: dict[str, np.ndarray], fps: float | None) -> float:
         value = float(stored)
         if fps is not None and not np.isclose(fps, value):
             raise DemoError(f"{path}: fps={fps} was asked but the file stores fps={value}")
-    if not (np.isfinite(value) and value > 0):
-        raise DemoError(f"{path}: key 'fps' must be a positive number, got {value!r}")
+    if problem := frame_rate_problem(value):
+        raise DemoError(f"{path}: key 'fps' {problem}")
     return float(value)
 
 
@@ -204,8 +204,9 @@ def _project_demo(path: Path, arrays: dict[str, np.ndarray], tool: str | None) -
     if tool is not None and tool != stored_tool:
         raise DemoError(f"{path}: tool={tool!r} was asked but the file shows a {stored_tool!r}")
     source = _string(path, arrays, "source") if "source" in arrays else ""
+    fps = _fps(path, arrays, None)
     try:
-        return ToolDemo(head, handle, _fps(path, arrays, None), stored_tool, source=source or str(path))
+        return ToolDemo(head, handle, fps, stored_tool, source=source or str(path))
     except DemoError as error:
         raise DemoError(f"{path}: {error}") from None
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from toolimit.demos.tool_demo import ToolDemo
+from toolimit.demos.tool_demo import ToolDemo, frame_rate_problem
 from toolimit.errors import DemoError
 from toolimit.tools.registry import find_tool, load_entry_point, tool_records, tool_spec
 
@@ -471,8 +471,8 @@ def synthesize_motion(tool: str, seed: int, fps: float = 24) -> SyntheticMotion:
     (world frame, metres, z up, ground z = 0). 2.5-6 s long, starting and ending at rest.
     """
     generator = synthetic_generator(tool)
-    if not fps > 0:
-        raise DemoError(f"fps must be positive, got {fps}")
+    if problem := frame_rate_problem(fps):
+        raise DemoError(f"fps: {problem}")
     motion_rng, noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     knots, points, events, params = generator(motion_rng, float(fps))
     minimum_frames = int(np.ceil(MIN_DURATION * fps)) + 1

@@ -17,6 +17,23 @@ from toolimit.errors import DemoError
 MIN_FRAMES = 10
 #: A tool shorter than this (head to handle end, metres) is taken as a broken reconstruction.
 MIN_TOOL_LENGTH = 0.05
+#: The frame rates (Hz) a video of a demonstration can have: from a 1 fps time-lapse to a 1000 fps
+#: high-speed camera. Outside them a file's fps is an error, not a motion: 30 frames at 1e-6 fps
+#: would be a year-long motion that alignment resamples at the scene's 24 fps (23.7 GB).
+MIN_FPS, MAX_FPS = 1.0, 1000.0
+#: The longest demonstration (s): one tool motion filmed in one take lasts seconds; ten minutes.
+MAX_DURATION_S = 600.0
+#: The most frames of a demonstration: ten minutes at 166 fps, or 100 s at 1000 fps.
+MAX_FRAMES = 100_000
+
+
+def frame_rate_problem(fps: object) -> str | None:
+    """Why ``fps`` cannot be a demonstration's frame rate (Hz), or None when it can."""
+    if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)) or not np.isfinite(fps):
+        return f"must be a number of frames per second, got {fps!r}"
+    if not MIN_FPS <= fps <= MAX_FPS:
+        return f"must be between {MIN_FPS:g} and {MAX_FPS:g} frames per second (a video's), got {fps:g}"
+    return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,8 +68,15 @@ class ToolDemo:
             raise DemoError(f"head {head.shape} and handle {handle.shape} have different shapes")
         if head.shape[0] < MIN_FRAMES:
             raise DemoError(f"too few frames: {head.shape[0]} (need at least {MIN_FRAMES})")
-        if not (np.isfinite(self.fps) and self.fps > 0):
-            raise DemoError(f"fps: must be a positive number, got {self.fps!r}")
+        if head.shape[0] > MAX_FRAMES:
+            raise DemoError(f"too many frames: {head.shape[0]} (at most {MAX_FRAMES})")
+        if problem := frame_rate_problem(self.fps):
+            raise DemoError(f"fps: {problem}")
+        duration = (head.shape[0] - 1) / float(self.fps)
+        if duration > MAX_DURATION_S:
+            raise DemoError(
+                f"duration {duration:g} s ({head.shape[0]} frames at {self.fps:g} fps) is above {MAX_DURATION_S:g} s"
+            )
         if not isinstance(self.tool, str) or not self.tool:
             raise DemoError(f"tool: must be a non-empty name, got {self.tool!r}")
         lengths = np.linalg.norm(handle - head, axis=1)
@@ -166,8 +190,8 @@ class ToolDemo:
 
     def resampled(self, fps: float) -> ToolDemo:
         """The same motion at another frame rate (linear interpolation of both points)."""
-        if not fps > 0:
-            raise DemoError(f"fps must be positive, got {fps}")
+        if problem := frame_rate_problem(fps):
+            raise DemoError(f"fps: {problem}")
         n = int(np.floor(self.duration * fps + 1e-9)) + 1
         t_new = np.arange(n) / fps
         interp = lambda x: np.stack([np.interp(t_new, self.times, x[:, k]) for k in range(3)], 1)  # noqa: E731

@@ -10,7 +10,7 @@ model selection on held-out episodes.
 
 The best check is the one with the highest success rate, the latest among equals: a run that stopped
 early keeps the policy of the check it stopped on, and a run whose checks never succeed keeps its
-last check's. Its model is saved the moment it is found (``best-<steps>.zip``, named in
+last check's. Its model is saved the moment it is found (``best-<steps>.safetensors``, named in
 ``best.json`` with its check's outcome, the older file removed once the record is written), so that
 an interrupted run resumes with it.
 
@@ -28,13 +28,14 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from stable_baselines3 import PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 
-from toolimit.artifacts import atomic_path, save_json
+from toolimit.artifacts import atomic_path, inside_folder, save_json
 from toolimit.learn.evaluate import evaluate
+from toolimit.learn.policy_file import MODEL_SUFFIX, load_model, save_model
 from toolimit.learn.task import LearningTask
 
 #: The record of the kept check: its PPO steps, its outcome and its model's file.
@@ -68,15 +69,16 @@ class KeptPolicy:
         #: The kept check (``env_steps``, ``success_rate``, ``goal_reward_mean``, ``model``), or
         #: None before the first check.
         self.record: dict[str, Any] | None = json.loads(path.read_text()) if path.is_file() else None
+        if self.record is not None:  # a planted name must not make the bookkeeping read or delete outside
+            inside_folder(directory, self.record.get("model"), f"{path}: model")
 
     def offer(self, model: BaseAlgorithm, env_steps: int, success_rate: float, goal_reward_mean: float) -> bool:
         """Keep ``model`` (checked at ``env_steps`` with that outcome) if its success is at least
         the kept one's; whether it was kept."""
         if self.record is not None and success_rate < self.record["success_rate"]:
             return False
-        name = f"best-{env_steps}.zip"
-        with atomic_path(self.directory / name) as tmp:
-            model.save(tmp)
+        name = f"best-{env_steps}{MODEL_SUFFIX}"
+        save_model(cast(PPO, model), self.directory / name)
         previous = self.record
         self.record = {
             "env_steps": int(env_steps),
@@ -86,7 +88,9 @@ class KeptPolicy:
         }
         save_json(self.directory / BEST_JSON, self.record)
         if previous is not None and previous["model"] != name:
-            (self.directory / previous["model"]).unlink(missing_ok=True)
+            inside_folder(self.directory, previous["model"], f"{self.directory / BEST_JSON}: model").unlink(
+                missing_ok=True
+            )
         return True
 
     def install(self, policy_file: Path, last_model: PPO, last_file: Path) -> tuple[PPO, dict[str, Any]]:
@@ -100,10 +104,10 @@ class KeptPolicy:
         choice: dict[str, Any] = {"policy": "last_update", "env_steps": last_steps, "best_check": self.record}
         policy, source = last_model, last_file
         if self.record is not None:
-            best_file = self.directory / self.record["model"]
+            best_file = inside_folder(self.directory, self.record["model"], f"{self.directory / BEST_JSON}: model")
             best_wins = self.record["env_steps"] == last_steps  # the same policy: nothing to choose
             if not best_wins:
-                best_model = PPO.load(best_file, device="cpu")
+                best_model = load_model(best_file)
                 outcomes = {
                     "best_check": selection_outcome(best_model, self.task, self.episodes, self.scene_kwargs),
                     "last_update": selection_outcome(last_model, self.task, self.episodes, self.scene_kwargs),

@@ -28,14 +28,16 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
-from toolimit.artifacts import atomic_path, save_json
+from toolimit.artifacts import inside_folder, save_json
 from toolimit.errors import InputError
 from toolimit.learn.cloning import AUTHORS_ACTION_STD, fix_action_std, normalised_action_std
+from toolimit.learn.policy_file import MODEL_SUFFIX, load_model, save_model
 from toolimit.learn.vec_env import BatchedTaskVecEnv
 
-CHECKPOINT_ZIP = "checkpoint.zip"
+#: The model files (:mod:`toolimit.learn.policy_file`): the last checkpoint's and the run's policy.
+CHECKPOINT_MODEL = "checkpoint" + MODEL_SUFFIX
 CHECKPOINT_STATE = "checkpoint.json"
-POLICY_ZIP = "policy.zip"
+POLICY_MODEL = "policy" + MODEL_SUFFIX
 
 
 @dataclass(frozen=True)
@@ -179,13 +181,13 @@ class _Checkpoints(BaseCallback):
 
 
 def save_checkpoint(
-    model: PPO, directory: Path, model_file: str = CHECKPOINT_ZIP, elapsed: Elapsed | None = None
+    model: PPO, directory: Path, model_file: str = CHECKPOINT_MODEL, elapsed: Elapsed | None = None
 ) -> None:
-    """Write the model (SB3: parameters, optimiser) to ``model_file`` and ``checkpoint.json`` (that
+    """Write the model (parameters, optimiser: :func:`~toolimit.learn.policy_file.save_model`) to ``model_file`` and ``checkpoint.json`` (that
     file's name, steps done, the environment's generator state before its last reset, torch's random
     state, the ADR state, ``elapsed()``'s times: a resumed run's record counts its earlier sittings)
-    atomically. The final checkpoint of :func:`train` is ``policy.zip`` itself, so that a finished
-    run keeps one copy of its model (``checkpoint.zip`` is then removed)."""
+    atomically. The final checkpoint of :func:`train` is ``policy.safetensors`` itself, so that a finished
+    run keeps one copy of its model (``checkpoint.safetensors`` is then removed)."""
     env: BatchedTaskVecEnv = model.get_env()  # type: ignore[assignment]
     state = {
         "model": model_file,
@@ -199,11 +201,10 @@ def save_checkpoint(
         state["adr"] = env.adr.state_dict()
     if elapsed is not None:
         state["elapsed"] = elapsed()
-    with atomic_path(directory / model_file) as tmp:
-        model.save(tmp)
+    save_model(model, directory / model_file)
     save_json(directory / CHECKPOINT_STATE, state)
-    if model_file != CHECKPOINT_ZIP:
-        (directory / CHECKPOINT_ZIP).unlink(missing_ok=True)
+    if model_file != CHECKPOINT_MODEL:
+        (directory / CHECKPOINT_MODEL).unlink(missing_ok=True)
 
 
 def load_checkpoint(directory: Path, env: BatchedTaskVecEnv, settings: PpoSettings) -> PPO | None:
@@ -214,14 +215,19 @@ def load_checkpoint(directory: Path, env: BatchedTaskVecEnv, settings: PpoSettin
     if not state_path.is_file():
         return None
     state = json.loads(state_path.read_text())
-    zip_path = directory / state.get("model", CHECKPOINT_ZIP)
-    if not zip_path.is_file():
+    model_path = inside_folder(directory, state.get("model", CHECKPOINT_MODEL), f"{state_path}: model")
+    if model_path.suffix != MODEL_SUFFIX:
+        raise InputError(
+            f"{state_path}: its model {model_path.name} is not a {MODEL_SUFFIX} file (a stable-baselines3 zip of an "
+            "earlier toolimit, whose loading can run code); start a new output folder"
+        )
+    if not model_path.is_file():
         return None
     if env.adr is not None:  # before the model: a checkpoint of an earlier ADR rule is refused first
         if "adr" not in state:
             raise InputError(f"{state_path}: this checkpoint was written without --adr; start a new output folder")
         env.adr.load_state_dict(state["adr"], str(state_path))
-    model = PPO.load(zip_path, env=env, device="cpu")
+    model = load_model(model_path, env)
     if changed := _changed_settings(model, settings):
         raise InputError(
             f"{state_path}: this checkpoint was written with other PPO settings ({'; '.join(changed)}); "
@@ -261,13 +267,13 @@ def train(
     directory: str | os.PathLike[str],
     checkpoint_every: int = 10,
     callbacks: list[BaseCallback] | None = None,
-    final_file: str = POLICY_ZIP,
+    final_file: str = POLICY_MODEL,
     elapsed: Elapsed | None = None,
 ) -> PPO:
     """Run PPO until ``model.num_timesteps`` reaches ``total_timesteps``, checkpointing into
     ``directory`` every ``checkpoint_every`` updates (with ``elapsed()``'s times, if given);
     ``final_file`` is the final model and the final checkpoint (a larger budget continues from it):
-    ``policy.zip``, or ``checkpoint.zip`` when the run's policy is another one
+    ``policy.safetensors``, or ``checkpoint.safetensors`` when the run's policy is another one
     (:mod:`toolimit.learn.kept_policy`). Interrupted (Ctrl-C), the last checkpoint stays:
     :func:`resume_or_start` continues it."""
     directory = Path(directory)

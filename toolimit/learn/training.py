@@ -1,13 +1,14 @@
 """Learning a policy for a task, end to end: cloning, value warm-up, PPO, with checkpoints.
 
 ``learn_policy(task, out_dir, LearningConfig(...))`` writes into ``out_dir``:
-``task.npz`` (the task), ``cloning.json`` (data and losses), ``checkpoint.zip/.json`` (every few
-updates, and the last update's model once finished; without ``keep_best``, ``checkpoint.json``
-then names ``policy.zip``, the one copy of the final model), ``best.json`` and ``best-<steps>.zip``
+``task.npz`` (the task), ``cloning.json`` (data and losses), ``checkpoint.safetensors/.json`` (every
+few updates, and the last update's model once finished; without ``keep_best``, ``checkpoint.json``
+then names ``policy.safetensors``, the one copy of the final model), ``best.json`` and
+``best-<steps>.safetensors``
 (the best check's model, :mod:`toolimit.learn.kept_policy`), ``curve.jsonl`` (one line per
 update: env steps, mean return, success rate, goal reward, standard deviation, KL; under ADR the
-goal box bounds ``adr_low``, ``adr_high`` the update's episodes were drawn in), ``policy.zip``
-(the run's policy, an SB3 model: with ``keep_best`` the best check's or the last update's,
+goal box bounds ``adr_low``, ``adr_high`` the update's episodes were drawn in), ``policy.safetensors``
+(the run's policy, an SB3 model without pickle, :mod:`toolimit.learn.policy_file`: with ``keep_best`` the best check's or the last update's,
 the better on episodes of their own) and ``learning.json`` (settings,
 env steps, wall time split between simulation and learning; under ADR the final bounds and every
 boundary test, :meth:`toolimit.learn.adr.AdrState.record`). Run again on the same folder, it
@@ -43,10 +44,11 @@ from toolimit.learn.early_stop import EarlyStop, StopRule
 from toolimit.learn.env import BOX_OFFSET_BOUND
 from toolimit.learn.evaluate import evaluate, observes_goal_box
 from toolimit.learn.kept_policy import KeptPolicy
+from toolimit.learn.policy_file import load_model, load_sb3_zip, model_task
 from toolimit.learn.ppo import (
+    CHECKPOINT_MODEL,
     CHECKPOINT_STATE,
-    CHECKPOINT_ZIP,
-    POLICY_ZIP,
+    POLICY_MODEL,
     PRESETS,
     PpoSettings,
     blind_to_goal_box,
@@ -376,7 +378,6 @@ def _learn_policy(
     if config.adr:  # a scene without a goal box to move is refused before anything is written
         goal_box_spec(make_scene(task.tool, task.world))
     torch.manual_seed(config.seed)
-    task.save(out_dir / TASK_NPZ)
     scene_kwargs = config.simulation_kwargs(task)
     env = BatchedTaskVecEnv(
         task,
@@ -404,6 +405,7 @@ def _learn_policy(
     except BaseException:  # a refused checkpoint or clone: the simulation's workers end here too
         env.close()
         raise
+    task.save(out_dir / TASK_NPZ)  # once the checkpoint is accepted: a refused resume writes nothing
     curve = out_dir / CURVE_JSONL
     lines = _truncate_curve(curve, model.num_timesteps)
     checked = config.early_stop and not config.adr
@@ -424,12 +426,12 @@ def _learn_policy(
         }
 
     try:
-        final_file = POLICY_ZIP if kept is None else CHECKPOINT_ZIP
+        final_file = POLICY_MODEL if kept is None else CHECKPOINT_MODEL
         train(model, budget, out_dir, config.checkpoint_every, callbacks, final_file, elapsed)
     finally:
         env.close()  # ends the simulation's worker processes (multiprocessing's exit hook, if earlier)
     policy, choice = (
-        (model, None) if kept is None else kept.install(out_dir / POLICY_ZIP, model, out_dir / CHECKPOINT_ZIP)
+        (model, None) if kept is None else kept.install(out_dir / POLICY_MODEL, model, out_dir / CHECKPOINT_MODEL)
     )
     cloning_steps = previous.get("cloning_env_steps", 0) if resumed else cloning_record.get("env_steps", 0)
     times = elapsed()
@@ -553,14 +555,36 @@ def _truncate_curve(path: Path, env_steps: int) -> list[dict[str, Any]]:
     return kept
 
 
-def load_policy(directory: str | Path) -> tuple[PPO, LearningTask]:
-    """The final model and task of a :func:`learn_policy` folder; FileNotFoundError names what is
-    missing, InputError an ADR policy of an earlier observation."""
+#: A stable-baselines3 zip an earlier toolimit wrote as a folder's policy: read only on request.
+SB3_POLICY_ZIP = "policy.zip"
+
+
+def load_policy(directory: str | Path, trust_sb3_zip: bool = False) -> tuple[PPO, LearningTask]:
+    """The final model and task of a :func:`learn_policy` folder (``policy.safetensors``, read
+    without pickle); FileNotFoundError names what is missing, InputError a model of another task or
+    an ADR policy of an earlier observation. A folder holding only a stable-baselines3
+    ``policy.zip`` is refused unless ``trust_sb3_zip`` (its loading unpickles it and can run code;
+    :func:`~toolimit.learn.policy_file.load_sb3_zip` warns)."""
     directory = Path(directory)
-    policy = directory / POLICY_ZIP
-    if not policy.is_file():
+    policy, zip_policy = directory / POLICY_MODEL, directory / SB3_POLICY_ZIP
+    if policy.is_file():
+        model = load_model(policy)
+        task = LearningTask.load(directory / TASK_NPZ)
+        recorded = model_task(policy)
+        names = (task.tool, task.world, task.robot)
+        if recorded is not None and (recorded["tool"], recorded["world"], recorded["robot"]) != names:
+            learnt = "/".join(str(recorded[key]) for key in ("tool", "world", "robot"))
+            raise InputError(f"{policy}: learnt on {learnt}, not on {TASK_NPZ}'s {'/'.join(names)}")
+    elif zip_policy.is_file():
+        if not trust_sb3_zip:
+            raise InputError(
+                f"{zip_policy}: a stable-baselines3 zip, whose loading unpickles it and can run code; toolimit reads "
+                f"{POLICY_MODEL}. If you trust the file's author, load it explicitly (--trust-sb3-zip)"
+            )
+        task = LearningTask.load(directory / TASK_NPZ)
+        policy, model = zip_policy, load_sb3_zip(zip_policy)
+    else:
         raise FileNotFoundError(f"{policy}: no such file (run `toolimit learn` first)")
-    model, task = PPO.load(policy, device="cpu"), LearningTask.load(directory / TASK_NPZ)
     space = cast(Box, model.observation_space)
     if observes_goal_box(model, task) and space.high[-1] != np.float32(BOX_OFFSET_BOUND):
         raise InputError(

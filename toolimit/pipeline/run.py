@@ -193,14 +193,26 @@ def run_stages(
 
 
 def _timed(out: Path, stage: str, work: Callable[[], Any]) -> Any:
-    """``work()``, its wall time added to ``stage``'s in OUT/run.json (also when it raises)."""
+    """``work()``, its wall time added to ``stage``'s in OUT/run.json (also when it is interrupted or
+    finds nothing); not when it refuses its input (an InputError): the stage did not run, and a
+    command refused in one line leaves nothing written."""
     started = time.perf_counter()
     try:
-        return work()
-    finally:
-        times = _stage_times(out)
-        times[stage] = times.get(stage, 0.0) + time.perf_counter() - started
-        save_json(out / RUN_JSON, {"stage_times_s": times})
+        result = work()
+    except InputError:
+        raise
+    except BaseException:
+        _add_stage_time(out, stage, time.perf_counter() - started)
+        raise
+    _add_stage_time(out, stage, time.perf_counter() - started)
+    return result
+
+
+def _add_stage_time(out: Path, stage: str, seconds: float) -> None:
+    """Add ``seconds`` to ``stage``'s wall time in OUT/run.json."""
+    times = _stage_times(out)
+    times[stage] = times.get(stage, 0.0) + seconds
+    save_json(out / RUN_JSON, {"stage_times_s": times})
 
 
 def _check_same_run(folder: Path, expected: dict[str, str]) -> None:

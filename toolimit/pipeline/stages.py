@@ -322,10 +322,10 @@ def learn_stage(
 
 def learning_finished(folder: str | Path) -> bool:
     """A learning folder whose run ended (its final policy and record written)."""
-    from toolimit.learn.ppo import POLICY_ZIP
+    from toolimit.learn.ppo import POLICY_MODEL
 
     folder = Path(folder)
-    return (folder / POLICY_ZIP).is_file() and (folder / LEARNING_JSON).is_file()
+    return (folder / POLICY_MODEL).is_file() and (folder / LEARNING_JSON).is_file()
 
 
 @dataclass(frozen=True)
@@ -347,10 +347,13 @@ class PolicyEvaluation:
     task: LearningTask
 
 
-def evaluate_stage(policy: str | Path, settings: EvaluationSettings = EvaluationSettings()) -> PolicyEvaluation:
+def evaluate_stage(
+    policy: str | Path, settings: EvaluationSettings = EvaluationSettings(), trust_sb3_zip: bool = False
+) -> PolicyEvaluation:
     """Deterministic and stochastic rollouts of the policy in the folder ``policy``
-    (``toolimit learn``'s), ``settings.episodes`` each from seeded resets."""
-    model, task = load_policy(policy)
+    (``toolimit learn``'s), ``settings.episodes`` each from seeded resets; a stable-baselines3
+    ``policy.zip`` only with ``trust_sb3_zip`` (:func:`~toolimit.learn.training.load_policy`)."""
+    model, task = load_policy(policy, trust_sb3_zip)
     deterministic = evaluate(model, task, settings.episodes, deterministic=True, seed=settings.seed)
     stochastic = evaluate(model, task, settings.episodes, deterministic=False, seed=settings.seed)
     record = {

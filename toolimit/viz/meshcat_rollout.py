@@ -30,7 +30,7 @@ from toolimit.viz.meshcat_views import save_html
 
 
 class Policy(Protocol):
-    """What acts in a rollout: stable-baselines3's ``predict`` (PPO, a loaded policy.zip)."""
+    """What acts in a rollout: stable-baselines3's ``predict`` (PPO, a loaded policy.safetensors)."""
 
     def predict(self, observation: np.ndarray, deterministic: bool = ...) -> tuple[np.ndarray, Any]: ...
 
