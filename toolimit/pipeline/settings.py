@@ -142,8 +142,6 @@ class EvaluationSettings:
         _check_integer("seed", self.seed, 0)
 
 
-
-
 @dataclass(frozen=True)
 class ExportSettings:
     """Export of a joint path for a real robot (``toolimit export``).
