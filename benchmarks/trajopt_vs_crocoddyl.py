@@ -38,6 +38,7 @@ import trajopt_problem as tp  # noqa: E402
 from toolimit.artifacts import save_json  # noqa: E402
 from toolimit.compare.crocoddyl_tracking import solve_with_crocoddyl  # noqa: E402
 from toolimit.robots import make_robot  # noqa: E402
+from toolimit.robots.motion_bound import MotionBound  # noqa: E402
 from toolimit.trajopt import (  # noqa: E402
     PoseTargets,
     TrackingProblem,
@@ -108,11 +109,12 @@ HOLD = ("hold",)
 HOLD_AND_ROLLOUT = ("hold", "rollout")
 
 
-def toolimit_options(targets: tp.Targets, dt: float, initialisations: tuple[str, ...] = HOLD) -> TrackOptions:
-    """PROBLEM.md's weights, start configuration and time step for toolimit's ``track``."""
+def toolimit_options(targets: tp.Targets, dt: float, robot, initialisations: tuple[str, ...] = HOLD) -> TrackOptions:
+    """PROBLEM.md's weights, start configuration and time step for toolimit's ``track``, within the
+    model's position and velocity limits alone: the problem Crocoddyl solves (no acceleration bound)."""
     weights = TrackingWeights(position=tp.POSE_WEIGHTS[0], rotation=tp.POSE_WEIGHTS[3], velocity=tp.W_V)
     return TrackOptions(weights=weights, q_start=tp.Q0_ARM, time_scale=dt * targets.fps,
-                        initialisations=initialisations)
+                        initialisations=initialisations, bound=MotionBound.model(robot))
 
 
 def run_toolimit(targets: tp.Targets, guesses: np.ndarray, repeats: int, robot, dt: float,
@@ -120,14 +122,14 @@ def run_toolimit(targets: tp.Targets, guesses: np.ndarray, repeats: int, robot, 
     """toolimit's multi-start ``track`` over the same guesses, then ``repeats`` timed SQP solves of the best
     (with its joint initialisation, the rollout included in the time when it won)."""
     pose_targets = PoseTargets(targets.positions, targets.rotations, targets.fps)
-    options = toolimit_options(targets, dt, initialisations)
+    options = toolimit_options(targets, dt, robot, initialisations)
     weights = options.weights
     started = time.perf_counter()
     result = track(robot, pose_targets, options, guesses=guesses)
     multistart = time.perf_counter() - started
     stats = result.statistics
     best_start = stats.start_index
-    problem = TrackingProblem(robot, pose_targets, dt, tp.Q0_ARM, weights)
+    problem = TrackingProblem(robot, pose_targets, dt, tp.Q0_ARM, weights, bound=options.bound)
     times = []
     rollout = stats.initialisation == "rollout"
     for _ in range(repeats):
@@ -169,7 +171,7 @@ def time_scale_variant(robot_model: tp.PandaOnBase, targets: tp.Targets, robot) 
     same 8 guesses (held q0) for a pair-wise J."""
     pose_targets = PoseTargets(targets.positions, targets.rotations, targets.fps)
     started = time.perf_counter()
-    result = choose_time_scale(robot, pose_targets, toolimit_options(targets, tp.DT, HOLD_AND_ROLLOUT))
+    result = choose_time_scale(robot, pose_targets, toolimit_options(targets, tp.DT, robot, HOLD_AND_ROLLOUT))
     elapsed = time.perf_counter() - started
     dt = result.time_scale / targets.fps
     problem = tp.make_problem(robot_model, targets, dt=dt)

@@ -24,6 +24,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from packaging.requirements import Requirement
 
 from toolimit.cli import build_parser, main
 
@@ -80,10 +81,13 @@ def test_pip_installs_what_pyproject_declares(argv: list[str]):
         if extras:
             for extra in filter(None, (extras.group(1) or "").split(",")):
                 assert extra in project["optional-dependencies"], f"README installs an unknown extra [{extra}]"
-        else:
-            name = re.split(r"[=<>!~]", target, maxsplit=1)[0]
-            assert name in pins and pins[name].replace(" ", "") == target, (
-                f"{target} is not pyproject's {pins.get(name)}"
+        else:  # a package named on its own: one pyproject declares, at a version its range admits
+            requirement = Requirement(target)
+            assert requirement.name in pins, f"README installs {requirement.name}, which pyproject does not declare"
+            declared = Requirement(pins[requirement.name]).specifier
+            pinned = [spec.version for spec in requirement.specifier if spec.operator == "=="]
+            assert len(pinned) == 1 and declared.contains(pinned[0]), (
+                f"{target} is not one version within pyproject's {pins[requirement.name]}"
             )
 
 

@@ -36,6 +36,7 @@ from toolimit.progress import progress_bar
 from toolimit.robots import RobotModel
 from toolimit.tools import wrap_angle
 from toolimit.trajopt.initial_guess import ik_rollout
+from toolimit.robots.motion_bound import MotionBound
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
 from toolimit.trajopt.result import TrackingStatistics, TrajectoryResult, UpsideDownTracking
 from toolimit.trajopt.sqp import SqpOptions, SqpOutcome, solve_sqp
@@ -63,6 +64,8 @@ class TrackOptions:
         initialisations: joint initialisations run from every base guess, among ``"hold"``
             (q_start held) and ``"rollout"`` (greedy differential IK); see the module docstring.
         progress: show a progress bar over the starts.
+        bound: the joints' range, velocity and acceleration bounds; ``MotionBound.of(robot)`` when
+            None (:class:`~toolimit.trajopt.problem.TrackingProblem`).
     """
 
     weights: TrackingWeights = TrackingWeights()
@@ -76,6 +79,7 @@ class TrackOptions:
     merge_distance: float = 0.02
     initialisations: tuple[str, ...] = INITIALISATIONS
     progress: bool = False
+    bound: MotionBound | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.starts, (int, np.integer)) and self.starts >= 1):
@@ -173,7 +177,7 @@ def track(
     total = len(variants) * len(options.initialisations) * len(guesses)
     with progress_bar(total=total, desc=f"trajopt {robot.name}", disable=not options.progress) as bar:
         for variant_index, variant in enumerate(variants):
-            problem = TrackingProblem(robot, variant, dt, options.q_start, options.weights)
+            problem = TrackingProblem(robot, variant, dt, options.q_start, options.weights, options.bound)
             finished: list[SqpOutcome] = []
             for initialisation in options.initialisations:
                 for start_index, guess in enumerate(guesses):
