@@ -93,7 +93,6 @@ def test_the_panda_follows_the_scripted_scythe_draw_within_its_limits(tmp_path: 
     any pace)."""
     lfd = kinesthetic_task(shipped_task("scythe", "3d"), tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=2)
     record = json.loads((tmp_path / "lfd" / SELECTION_JSON).read_text())["candidates"][0]
-    assert record["robot_reward_by_time_scale"]["1"] == 0.0  # at real time the bound keeps it from cutting
     assert record["time_scale"] <= 1.5 and record["robot_reward"] >= 4.0
     assert lfd.tool == "scythe"
 
