@@ -34,9 +34,9 @@ import pinocchio as pin
 from toolimit.errors import BaseInsideFootprint, InvalidSetting
 from toolimit.progress import progress_bar
 from toolimit.robots import RobotModel
+from toolimit.robots.motion_bound import MotionBound
 from toolimit.tools import wrap_angle
 from toolimit.trajopt.initial_guess import ik_rollout
-from toolimit.robots.motion_bound import MotionBound
 from toolimit.trajopt.problem import PoseTargets, TrackingProblem, TrackingWeights
 from toolimit.trajopt.result import TrackingStatistics, TrajectoryResult, UpsideDownTracking
 from toolimit.trajopt.sqp import SqpOptions, SqpOutcome, solve_sqp
