@@ -18,6 +18,7 @@ import numpy as np
 
 from toolimit.robots.limits import SUPPORTED_ROBOTS, published_limits
 from toolimit.robots.model import RobotModel
+from toolimit.robots.motion_bound import motion_from_rest
 
 #: Ratios to a limit up to this count as within it: the rounding of a motion at the limit.
 _ROUNDING = 1e-9
@@ -48,14 +49,11 @@ class LimitUse:
 
 def limit_use(joints: np.ndarray, dt: float, robot: RobotModel) -> LimitUse:
     """The limit use of episodes' joints (E, H+1, N) rad, one sample every ``dt`` s, on ``robot``."""
-    joints = np.asarray(joints, dtype=float)
-    velocity = np.diff(joints, axis=1) / dt  # (E, H, N)
+    velocity, acceleration = motion_from_rest(np.asarray(joints, dtype=float), dt)  # (E, H, N) each
     velocity_ratio = np.abs(velocity) / robot.velocity_limit
     past = np.any(velocity_ratio > 1 + _ROUNDING, axis=2)
     acceleration_ratio = None
     if robot.name in SUPPORTED_ROBOTS:
-        at_rest = np.zeros_like(velocity[:, :1])
-        acceleration = np.diff(np.concatenate([at_rest, velocity], axis=1), axis=1) / dt
         ratios = np.abs(acceleration) / published_limits(robot.name).acceleration
         past |= np.any(ratios > 1 + _ROUNDING, axis=2)
         acceleration_ratio = ratios.max(axis=(1, 2))

@@ -70,13 +70,10 @@ class MotionBound:
     def holds(self, q: np.ndarray, dt: float) -> bool:
         """Whether the joint path q (T+1, N) rad, one sample every ``dt`` s from rest, keeps the
         range, the velocity and (if bounded) the acceleration, finite differences (rounding aside)."""
-        velocity = np.diff(q, axis=0) / dt
+        velocity, acceleration = motion_from_rest(q, dt)
         if np.any((q < self.lower) | (q > self.upper)) or np.any(np.abs(velocity) > self.velocity * (1 + 1e-12)):
             return False
-        if self.acceleration is None:
-            return True
-        acceleration = np.diff(np.vstack([np.zeros((1, q.shape[1])), velocity]), axis=0) / dt
-        return bool(np.all(np.abs(acceleration) <= self.acceleration * (1 + 1e-9)))
+        return self.acceleration is None or bool(np.all(np.abs(acceleration) <= self.acceleration * (1 + 1e-9)))
 
     def step(
         self, q: np.ndarray, previous: np.ndarray, commanded: np.ndarray, dt: float
@@ -96,6 +93,15 @@ class MotionBound:
             velocity = np.clip(velocity, slowest, fastest)
         moved = np.clip(q + velocity * dt, self.lower, self.upper)
         return moved, (moved - q) / dt
+
+
+def motion_from_rest(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The velocities (rad/s) and accelerations (rad/s^2), both (..., T, N), of joint paths q
+    (..., T+1, N) rad sampled every ``dt`` s, by finite differences with the arm at rest before the
+    first sample."""
+    velocity = np.diff(q, axis=-2) / dt
+    at_rest = np.zeros_like(velocity[..., :1, :])
+    return velocity, np.diff(np.concatenate([at_rest, velocity], axis=-2), axis=-2) / dt
 
 
 def _braking_speed(room: np.ndarray, change: np.ndarray, dt: float) -> np.ndarray:
