@@ -6,7 +6,9 @@ preset runs and where each cell goes). ``--demo`` replaces the preset's demonstr
 and the sparse baseline first, ``--methods final,sparse_ppo``; the others on a later run into the
 same folder). ``--jobs N`` runs N experiments at a time, each in a child process whose output goes
 to OUT/logs/<experiment>.log. ``--ray [ADDRESS]`` runs them on a Ray cluster instead
-(:mod:`toolimit.experiments.on_cluster`), the log naming the node of each cell. Exit codes: 0 done, 1 an experiment's pipeline found nothing or its
+(:mod:`toolimit.experiments.on_cluster`), the log naming the node of each cell. ``--seed 0,1,2``
+runs several training seeds, each a reproduction of its own in OUT/seed_<S>/, and OUT/results.*
+put them side by side, each cell with its intervals over seeds and episodes. Exit codes: 0 done, 1 an experiment's pipeline found nothing or its
 robot cannot track the scripted motion of LfD so that it earns (those cells are missing from the
 results; a line says why), 2 bad input, 130 interrupted.
 """
@@ -21,7 +23,6 @@ from toolimit.cli import (
     CliError,
     add_out_argument,
     add_ray_argument,
-    add_seed_argument,
     check_count,
     check_output_folder,
     check_ray,
@@ -57,8 +58,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=METHODS,
         help=f"comma-separated methods to measure (default: all, {','.join(METHODS)}); the others are left for a later run",
     )
-    add_out_argument(parser, "output folder (one sub-folder per experiment, cells/, results.*)")
-    add_seed_argument(parser)
+    add_out_argument(parser, "output folder (seed_<S>/ for each seed, results.* of every seed)")
+    parser.add_argument(
+        "--seed",
+        "--seeds",
+        type=_seeds,
+        default=(0,),
+        help="training seed, or comma-separated seeds, e.g. 0,1,2, each in OUT/seed_<S>/ (default: 0)",
+    )
     parser.add_argument(
         "--jobs",
         type=int,
@@ -80,6 +87,21 @@ def _methods(text: str) -> tuple[str, ...]:
             f"unknown method(s) {', '.join(unknown) or '(none given)'}; known: {', '.join(METHODS)}"
         )
     return tuple(m for m in METHODS if m in names)
+
+
+def _seeds(text: str) -> tuple[int, ...]:
+    """``--seed``: distinct non-negative integers, comma-separated, in the order given; argparse
+    turns the error into one line."""
+    names = [name.strip() for name in text.split(",")]
+    if not all(name.isdigit() for name in names):
+        raise argparse.ArgumentTypeError(
+            f"expected non-negative integers separated by commas, e.g. 0,1,2, got {text!r}"
+        )
+    seeds = tuple(int(name) for name in names)
+    twice = sorted({seed for seed in seeds if seeds.count(seed) > 1})
+    if twice:
+        raise argparse.ArgumentTypeError(f"seed {', '.join(map(str, twice))} given twice in {text!r}")
+    return seeds
 
 
 def _experiments(args: argparse.Namespace, chosen: Preset) -> tuple[Experiment, ...]:
@@ -113,13 +135,12 @@ def run(args: argparse.Namespace) -> int:
     chosen = preset(args.preset)
     chosen = dataclasses.replace(chosen, experiments=_experiments(args, chosen))
     check_count("--jobs", args.jobs)
-    check_count("--seed", args.seed, minimum=0)
     check_output_folder(args.out, "--out")
     check_ray(args.ray)
     return reproduce(
         chosen,
         args.out,
-        seed=args.seed,
+        seeds=args.seed,
         methods=args.methods,
         jobs=args.jobs,
         progress=not args.quiet,

@@ -47,6 +47,7 @@ class OpenLoopResult:
             "success_rate": float(np.mean(self.successes)),
             "goal_reward_mean": float(np.mean(self.goal_rewards)),
             "goal_reward": self.goal_rewards.tolist(),
+            "successes": self.successes.tolist(),
             "commands_duration_s": self.duration,
             "episode_duration_s": self.horizon,
         }

@@ -70,6 +70,8 @@ class CellResult:
         goal_reward: mean goal reward at the last step (spade: spheres in the box).
         success_rate: fraction of episodes that pass the paper's success test.
         goal_rewards: (E,) per episode.
+        successes: (E,) per episode, whether it passed the test (None in cells saved before they
+            were recorded: :meth:`episode_successes` then rebuilds them from ``success_rate``).
         env_steps: environment steps the method learnt with (0 for tool_only and trajopt).
         wall_time_s: seconds the method's own work took (for the final policy: the whole
             ``toolimit run``; for the baselines: their learning).
@@ -93,6 +95,7 @@ class CellResult:
     wall_time_s: float
     limits: dict[str, Any] | None = None
     exported: dict[str, Any] | None = None
+    successes: list[bool] | None = None
 
     @classmethod
     def of(
@@ -122,7 +125,16 @@ class CellResult:
             wall_time_s=float(wall_time_s),
             limits=limits,
             exported=exported,
+            successes=[bool(s) for s in successes],
         )
+
+    def episode_successes(self) -> np.ndarray:
+        """(E,) bool, whether each episode passed the success test; for a cell saved before they were
+        recorded, ``success_rate`` x E successes then the failures: the same mean and spread, which is
+        all an interval over episodes uses (the order of the episodes is lost)."""
+        if self.successes is not None:
+            return np.asarray(self.successes, dtype=bool)
+        return successes_from_rate(self.success_rate, len(self.goal_rewards))
 
     def record(self) -> dict[str, Any]:
         """JSON-ready form (the ``cells`` entries of ``results.json``)."""
@@ -132,3 +144,12 @@ class CellResult:
     def load(cls, path: Path) -> CellResult:
         """A cell saved by :func:`toolimit.artifacts.save_json` of :meth:`record`."""
         return cls(**json.loads(path.read_text()))
+
+
+def successes_from_rate(rate: float, episodes: int) -> np.ndarray:
+    """(E,) bool: ``round(rate * episodes)`` successes then failures, the episodes of a record that
+    kept only its success rate over ``episodes`` episodes."""
+    passed = round(rate * episodes)
+    if not np.isclose(passed, rate * episodes, atol=1e-6):
+        raise ValueError(f"a success rate of {rate} is not a count of {episodes} episodes")
+    return np.arange(episodes) < passed

@@ -1,10 +1,16 @@
 """The results of ``toolimit reproduce``: ``results.json``, a markdown table and the figure (SVG).
 
-``results.json`` holds ``cells`` (each a :class:`~toolimit.experiments.cells.CellResult` record:
-``tool``, ``demo``, ``robot``, ``method``, ``goal_reward``, ``success_rate``, ...) and the preset.
-The table has one row per experiment and one column per method, "goal reward (success rate)". The
-figure is the paper's: one group of bars per experiment, the goal reward on a log scale, the success
-threshold drawn; one figure per tool, since the goal rewards of different tools do not compare.
+``results.json`` holds the preset, ``seeds`` (those with cells), ``cells`` (each a
+:class:`~toolimit.experiments.cells.CellResult` record with its ``seed``: ``tool``, ``demo``,
+``robot``, ``method``, ``goal_reward``, ``success_rate``, ...), ``summary`` (each cell over its
+seeds, :class:`~toolimit.experiments.summary.CellSummary`) and ``aggregates`` (each method over
+its demonstrations, :class:`~toolimit.experiments.summary.MethodSummary`). A ``results.json``
+written before there were seeds (a ``preset`` with its ``seed``, cells without) reads as that one
+seed's (:func:`read_results`). The first table has one row per experiment and one column per
+method, "goal reward [95 % interval] (success [95 % interval])"; the second one row per method of
+a tool, world and robot over its demonstrations. The figure is the paper's: one group of bars per
+experiment, the goal reward on a log scale with its interval, the success threshold drawn; one
+figure per tool, since the goal rewards of different tools do not compare.
 """
 
 from __future__ import annotations
@@ -15,6 +21,8 @@ from typing import Any
 
 from toolimit.artifacts import save_json, save_text
 from toolimit.experiments.cells import METHODS, CellResult
+from toolimit.experiments.intervals import Interval
+from toolimit.experiments.summary import METHOD, CellSummary, MethodSummary, Runs, summarise_cells, summarise_methods
 from toolimit.viz.svg_chart import BarGroup, log_bar_chart_svg
 
 RESULTS_JSON = "results.json"
@@ -24,67 +32,148 @@ RESULTS_MD = "results.md"
 SUCCESS_GOAL_REWARD = {"spade": 10.0, "hammer": 1.0}
 
 
-def _groups(cells: Sequence[CellResult]) -> dict[tuple[str, str, str, str], dict[str, CellResult]]:
-    """Cells by (tool, world, robot, demo), then by method, in the order first met."""
-    groups: dict[tuple[str, str, str, str], dict[str, CellResult]] = {}
-    for cell in cells:
-        groups.setdefault((cell.tool, cell.world, cell.robot, cell.demo), {})[cell.method] = cell
-    return groups
-
-
 #: The table's columns after the methods': the final policy's steps past the robot's limits, its
 #: export replayed open-loop.
 EXTRA_COLUMNS = ("final: steps past limits", "exported (open-loop)")
 
 
-def markdown_table(cells: Sequence[CellResult]) -> str:
-    """One row per experiment, one column per method: "goal reward (success rate)", then the final
+def read_results(record: dict[str, Any]) -> tuple[dict[str, Any], dict[int, list[CellResult]]]:
+    """The preset and the cells by seed of a ``results.json`` record, of either layout (module
+    docstring)."""
+    runs: dict[int, list[CellResult]] = {}
+    for entry in record["cells"]:
+        fields = dict(entry)
+        seed = fields.pop("seed") if "seed" in fields else record["preset"]["seed"]
+        runs.setdefault(int(seed), []).append(CellResult(**fields))
+    return record["preset"], runs
+
+
+def markdown_table(summaries: Sequence[CellSummary], seeds: Sequence[int]) -> str:
+    """One row per experiment, one column per method: "goal reward [interval] (success
+    [interval])", with the number of seeds where fewer than ``seeds`` measured it; then the final
     policy's share of steps past the robot's limits (largest velocity and acceleration ratios) and
     its export replayed open-loop; "-" where not measured."""
+    columns = (*METHODS, *EXTRA_COLUMNS)
     lines = [
-        "| tool | world | robot | demonstration | " + " | ".join((*METHODS, *EXTRA_COLUMNS)) + " |",
-        "| --- | --- | --- | --- | " + " | ".join("---:" for _ in (*METHODS, *EXTRA_COLUMNS)) + " |",
+        "| tool | world | robot | demonstration | " + " | ".join(columns) + " |",
+        "| --- | --- | --- | --- | " + " | ".join("---:" for _ in columns) + " |",
     ]
-    for (tool, world, robot, demo), by_method in _groups(cells).items():
-        values = [
-            _outcome(by_method[m].goal_reward, by_method[m].success_rate) if m in by_method else "-" for m in METHODS
-        ]
-        final = by_method.get("final")
-        values.append(_limits(final.limits) if final is not None and final.limits is not None else "-")
-        exported = None if final is None else final.exported
-        values.append(_outcome(exported["goal_reward_mean"], exported["success_rate"]) if exported else "-")
-        lines.append(f"| {tool} | {world} | {robot} | {demo} | " + " | ".join(values) + " |")
+    for experiment, by_method in _by_experiment(summaries).items():
+        values = [_cell(by_method[m], len(seeds)) if m in by_method else "-" for m in METHODS]
+        final = by_method.get(METHOD)
+        values += [_limits(final), _exported(final)]
+        lines.append("| " + " | ".join(experiment) + " | " + " | ".join(values) + " |")
     return "\n".join(lines) + "\n"
 
 
-def _outcome(goal_reward: float, success_rate: float) -> str:
-    return f"{goal_reward:.1f} ({success_rate:.2f})"
+def aggregates_table(aggregates: Sequence[MethodSummary]) -> str:
+    """One row per method of a tool, world and robot: its demonstrations and runs, the
+    interquartile mean of the runs' success rates and P(final > method), each with its interval."""
+    lines = [
+        "| tool | world | robot | method | demonstrations | runs | success (IQM) | P(final > method) |",
+        "| --- | --- | --- | --- | ---: | ---: | ---: | ---: |",
+    ]
+    for a in aggregates:
+        improvement = "-" if a.improvement is None else f"{_interval(a.improvement, 2)} on {len(a.improvement_demos)}"
+        row = (a.tool, a.world, a.robot, a.method, str(len(a.demos)), str(a.runs), _interval(a.success_iqm, 2))
+        lines.append("| " + " | ".join(row) + f" | {improvement} |")
+    return "\n".join(lines) + "\n"
 
 
-def _limits(record: dict[str, Any]) -> str:
-    """ "share (velocity ratio, acceleration ratio)", e.g. "0.00 (0.95, 0.95)"."""
-    acceleration = record["max_acceleration_ratio"]
-    ratios = f"{record['max_velocity_ratio']:.2f}" + ("" if acceleration is None else f", {acceleration:.2f}")
-    return f"{record['share_of_steps_past_limits']:.2f} ({ratios})"
+def _interval(interval: Interval, digits: int) -> str:
+    """ "value [low, high]", or "value [-]" with no interval."""
+    if interval.low is None or interval.high is None:
+        return f"{interval.value:.{digits}f} [-]"
+    return f"{interval.value:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
 
 
-def write_results(out_dir: Path, cells: Sequence[CellResult], preset: dict[str, Any]) -> list[Path]:
-    """Write ``results.json``, ``results.md`` and ``results_<tool>.svg`` into ``out_dir``; the paths."""
-    save_json(out_dir / RESULTS_JSON, {"preset": preset, "cells": [c.record() for c in cells]})
-    title = "# Results: goal reward (success rate) per method\n\n"
-    written = [out_dir / RESULTS_JSON, save_text(out_dir / RESULTS_MD, title + markdown_table(cells))]
-    for tool in dict.fromkeys(cell.tool for cell in cells):
-        groups = [
-            BarGroup(f"{demo} ({robot}, {world})", [by[m].goal_reward if m in by else None for m in METHODS])
-            for (t, world, robot, demo), by in _groups(cells).items()
+def _outcome(goal_reward: Interval, success: Interval) -> str:
+    return f"{_interval(goal_reward, 1)} ({_interval(success, 2)})"
+
+
+def _cell(summary: CellSummary, seeds: int) -> str:
+    fewer = f", {len(summary.seeds)} of {seeds} seeds" if len(summary.seeds) < seeds else ""
+    return _outcome(summary.goal_reward, summary.success) + fewer
+
+
+def _limits(final: CellSummary | None) -> str:
+    """ "share [interval] (velocity ratio, acceleration ratio)", e.g. "0.00 [0.00, 0.00] (0.95, 0.95)";
+    "-" when not recorded."""
+    if final is None or final.steps_past_limits is None or final.max_velocity_ratio is None:
+        return "-"
+    acceleration = final.max_acceleration_ratio
+    ratios = f"{final.max_velocity_ratio:.2f}" + ("" if acceleration is None else f", {acceleration:.2f}")
+    return f"{_interval(final.steps_past_limits, 2)} ({ratios})"
+
+
+def _exported(final: CellSummary | None) -> str:
+    """The export's open-loop outcome, "-" with no export."""
+    if final is None or final.exported_goal_reward is None or final.exported_success is None:
+        return "-"
+    return _outcome(final.exported_goal_reward, final.exported_success)
+
+
+def _by_experiment(summaries: Sequence[CellSummary]) -> dict[tuple[str, str, str, str], dict[str, CellSummary]]:
+    """Summaries by experiment (tool, world, robot, demo), then by method."""
+    groups: dict[tuple[str, str, str, str], dict[str, CellSummary]] = {}
+    for summary in summaries:
+        groups.setdefault(summary.experiment, {})[summary.method] = summary
+    return groups
+
+
+def results_markdown(
+    summaries: Sequence[CellSummary], aggregates: Sequence[MethodSummary], seeds: Sequence[int]
+) -> str:
+    """``results.md``: both tables, with how to read them."""
+    over = f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {', '.join(map(str, seeds))}"
+    return (
+        f"# Results over {over}\n\n"
+        "Goal reward (success rate) per method: the mean over seeds of each seed's mean over its "
+        "episodes, with its 95 % bootstrap interval over seeds and episodes "
+        "(`toolimit.experiments.intervals`).\n\n"
+        + markdown_table(summaries, seeds)
+        + "\nEach method over its demonstrations: the interquartile mean of the runs' success rates (a run: "
+        "one seed on one demonstration) with its stratified bootstrap interval, and the probability that "
+        "the final policy beats the method on a demonstration, on the demonstrations both were measured on; "
+        "[-]: one run per demonstration, no interval.\n\n" + aggregates_table(aggregates)
+    )
+
+
+def write_results(out_dir: Path, runs: Runs, preset: dict[str, Any]) -> list[Path]:
+    """Write ``results.json``, ``results.md`` and ``results_<tool>.svg`` of the cells ``runs``
+    (seed -> cells) into ``out_dir``; the paths."""
+    seeds = sorted(seed for seed, cells in runs.items() if cells)
+    summaries, aggregates = summarise_cells(runs), summarise_methods(runs)
+    record = {
+        "preset": preset,
+        "seeds": seeds,
+        "cells": [cell.record() | {"seed": seed} for seed in seeds for cell in runs[seed]],
+        "summary": [summary.record() for summary in summaries],
+        "aggregates": [aggregate.record() for aggregate in aggregates],
+    }
+    save_json(out_dir / RESULTS_JSON, record)
+    written = [out_dir / RESULTS_JSON, save_text(out_dir / RESULTS_MD, results_markdown(summaries, aggregates, seeds))]
+    groups = _by_experiment(summaries)
+    for tool in dict.fromkeys(summary.tool for summary in summaries):
+        bars = [
+            BarGroup(
+                f"{demo} ({robot}, {world})",
+                [by[m].goal_reward.value if m in by else None for m in METHODS],
+                [_span(by[m].goal_reward) if m in by else None for m in METHODS],
+            )
+            for (t, world, robot, demo), by in groups.items()
             if t == tool
         ]
         svg = log_bar_chart_svg(
-            groups,
+            bars,
             METHODS,
-            title=f"{tool}: goal reward per method",
+            title=f"{tool}: goal reward per method" + (f", {len(seeds)} seeds" if len(seeds) > 1 else ""),
             y_label="goal reward",
             threshold=SUCCESS_GOAL_REWARD.get(tool),
         )
         written.append(save_text(out_dir / f"results_{tool}.svg", svg))
     return written
+
+
+def _span(interval: Interval) -> tuple[float, float] | None:
+    return None if interval.low is None or interval.high is None else (interval.low, interval.high)

@@ -10,9 +10,16 @@ tracks the scene's scripted motion with the pipeline's stage iii settings in the
 where the arm cannot follow it at the pipeline's pace (:mod:`toolimit.learn.kinesthetic`), and
 learns from it with exactly the method's learning settings (cloning, then PPO). Each method is then
 measured on the same footing (:mod:`toolimit.experiments.measure`) and saved as
-OUT/cells/<cell>.json the moment it is known; run again, every saved cell is skipped and each stage
-resumes from its checkpoint. OUT/results.json, OUT/results.md and OUT/results_<tool>.svg are
-rewritten after every experiment.
+OUT/seed_<S>/cells/<cell>.json the moment it is known; run again, every saved cell is skipped and
+each stage resumes from its checkpoint.
+
+Each training seed S is a reproduction of its own in OUT/seed_<S>/ (its experiments' folders, cells/,
+logs/ and results), so that seeds can be run in separate sittings or on separate machines and put
+side by side after (copying the seed folders into one OUT). OUT/seed_<S>/results.* (that seed's
+cells) and OUT/results.json, OUT/results.md and OUT/results_<tool>.svg (every seed folder's cells,
+each cell with its intervals over the seeds that measured it, :mod:`toolimit.experiments.report`)
+are rewritten after every experiment. A folder of the earlier single-seed layout (OUT/cells/) is
+refused with the command that moves it into OUT/seed_<S>/.
 
 Presets: ``quick`` (the planar spade, tiny budgets: a minute, for CI and a first look), ``planar``
 (the same experiment with the planar world's default settings: the paper's pattern in a quarter of
@@ -22,15 +29,18 @@ demonstrations, every method on ``_00`` and the method's stages on the others, a
 stages on the authors' real hammer recording; the UR5 and Talos with the spade on the real
 recording, the method's stages only; the 3D world's default settings, every learner's actions
 spanning the authors' 3 rad/s on every joint, :data:`AUTHORS_ACTION_LIMIT`). A reproduction
-continues in its output folder only with the preset, seed and settings its results were made with.
-``jobs`` > 1 runs experiments at a time, each in a child ``toolimit
-reproduce`` process whose output goes to OUT/logs/<experiment>.log (the results do not depend on
-it: every experiment is seeded on its own), with its share of the cores for its simulation's
-threads (:func:`child_environment`).
+continues in its output folder only with the preset and settings its results were made with (and a
+seed folder only with its seed). ``jobs`` > 1 runs experiments at a time, seeds one after another in
+the same queue, each in a child ``toolimit reproduce`` process whose output goes to
+OUT/seed_<S>/logs/<experiment>.log (the results do not depend on it: every experiment is seeded on
+its own), with its share of the cores for its simulation's threads (:func:`child_environment`). On a
+Ray cluster the seeds run one after another; one command per seed, started side by side into the
+same OUT, shares the cluster among them.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import subprocess
@@ -85,9 +95,11 @@ class Preset:
         settings = PipelineSettings.for_world(experiment.world, self.quick, experiment.tool).with_seed(seed)
         return with_values(settings, dict(self.settings_changes + experiment.settings_changes))
 
-    def record(self, seed: int) -> dict[str, Any]:
-        """What results.json says of the preset, and what a resumed reproduction must match."""
-        return {"name": self.name, "quick": self.quick, "seed": seed, "settings_changes": dict(self.settings_changes)}
+    def record(self, seed: int | None) -> dict[str, Any]:
+        """What results.json says of the preset, and what a resumed reproduction must match: with the
+        seed in a seed's folder, without it (None) in the folder of every seed."""
+        record = {"name": self.name, "quick": self.quick, "settings_changes": dict(self.settings_changes)}
+        return record if seed is None else record | {"seed": seed}
 
 
 def preset(name: str) -> Preset:
@@ -124,53 +136,96 @@ def preset(name: str) -> Preset:
     return Preset(name, tuple(experiments), settings_changes=(("learning.action_limit", AUTHORS_ACTION_LIMIT),))
 
 
+def seed_folder(out: Path, seed: int) -> Path:
+    """The folder of seed ``seed``'s reproduction in ``out``: OUT/seed_<S>."""
+    return out / f"seed_{seed}"
+
+
 def reproduce(
     chosen: Preset,
     out: str | Path,
-    seed: int = 0,
+    seeds: Sequence[int] = (0,),
     methods: Sequence[str] = METHODS,
     jobs: int = 1,
     progress: bool = True,
     report: Report | None = None,
     ray: RayTarget = False,
 ) -> int:
-    """Measure every missing cell of ``chosen``'s experiments for ``methods`` into ``out`` and write
-    the results (module docstring). ``ray``: on a Ray cluster instead, every preparation and
-    learning run a task (:mod:`toolimit.experiments.on_cluster`; ``jobs`` unused), same cells.
-    Returns 0, or 1 when an experiment's pipeline found nothing or its robot cannot track LfD's
-    scripted motion so that it earns (those cells are missing; the report says why). Raises
-    :class:`~toolimit.interrupts.Interrupted` when a step (or a child, or a task) was interrupted,
-    after every finished cell was saved."""
+    """Measure every missing cell of ``chosen``'s experiments for ``methods`` and each of ``seeds``
+    into ``out`` and write the results (module docstring). ``ray``: on a Ray cluster instead, every
+    preparation and learning run a task (:mod:`toolimit.experiments.on_cluster`; ``jobs``
+    unused), same cells. Returns 0, or 1 when an experiment's pipeline found nothing or its robot
+    cannot track LfD's scripted motion so that it earns (those cells are missing; the report says
+    why). Raises :class:`~toolimit.interrupts.Interrupted` when a step (or a child, or a task) was
+    interrupted, after every finished cell was saved."""
     out = Path(out)
     say = report or (lambda name, line: None)
-    _check_same_preset(out, chosen.record(seed))
+    _check_folders(out, chosen, seeds)
 
-    def results() -> list[Path]:
-        cells = [CellResult.load(path) for path in sorted((out / "cells").glob("*.json"))]
-        return write_results(out, cells, chosen.record(seed))
+    def results(seed: int) -> list[Path]:
+        folder = seed_folder(out, seed)
+        written = write_results(folder, {seed: _cells(folder)}, chosen.record(seed))
+        every = {int(f.name.removeprefix("seed_")): _cells(f) for f in sorted(out.glob("seed_*")) if f.is_dir()}
+        return written + write_results(out, every, chosen.record(None))
+
+    def said(seed: int) -> Report:
+        return lambda name, line: say(_label(name, seed, seeds), line)
 
     code = 0
     if ray:
-        settings = {e: chosen.settings(e, seed) for e in chosen.experiments}
-        code = reproduce_on_cluster(settings, out, methods, ray, progress, say, results)
-    elif jobs > 1 and len(chosen.experiments) > 1:
-        code = _run_children(chosen, out, seed, methods, jobs, say, results)
+        for seed in seeds:
+            settings = {e: chosen.settings(e, seed) for e in chosen.experiments}
+            folder = seed_folder(out, seed)
+            after = functools.partial(results, seed)
+            code = max(code, reproduce_on_cluster(settings, folder, methods, ray, progress, said(seed), after))
+    elif jobs > 1 and len(chosen.experiments) * len(seeds) > 1:
+        code = _run_children(chosen, out, seeds, methods, jobs, say, results)
     else:
-        for experiment in chosen.experiments:
-            code = max(code, reproduce_experiment(experiment, chosen, out, seed, methods, progress, say))
-            results()
-    say("results", f"wrote {', '.join(str(path) for path in results())}")
+        for seed in seeds:
+            for experiment in chosen.experiments:
+                folder = seed_folder(out, seed)
+                code = max(code, reproduce_experiment(experiment, chosen, folder, seed, methods, progress, said(seed)))
+                results(seed)
+    for seed in seeds:
+        written = results(seed)
+    say("results", f"wrote {', '.join(str(path) for path in written)}")
     return code
 
 
-def _check_same_preset(out: Path, preset: dict[str, Any]) -> None:
-    """InputError when ``out`` holds the results of another preset, seed or settings: their cells
-    would be taken for this reproduction's."""
-    path = out / RESULTS_JSON
+def _label(name: str, seed: int, seeds: Sequence[int]) -> str:
+    """How a line names an experiment (or "results"): with its seed's folder when there are several seeds."""
+    return name if len(seeds) == 1 else f"seed_{seed}/{name}"
+
+
+def _cells(folder: Path) -> list[CellResult]:
+    """The cells saved in ``folder``/cells."""
+    return [CellResult.load(path) for path in sorted((folder / "cells").glob("*.json"))]
+
+
+def _check_folders(out: Path, chosen: Preset, seeds: Sequence[int]) -> None:
+    """InputError when ``out`` is a folder of the earlier single-seed layout, or holds the results of
+    another preset or settings, or a seed's folder those of another seed: their cells would be taken
+    for this reproduction's."""
+    aggregate = out / RESULTS_JSON
+    earlier = json.loads(aggregate.read_text()).get("preset", {}) if aggregate.is_file() else {}
+    if (out / "cells").is_dir() or "seed" in earlier:
+        seed = earlier.get("seed", "S")
+        raise InputError(
+            f"{out}: the results of one seed in the earlier layout ({out / 'cells'}); a seed's reproduction is now "
+            f"{out}/seed_<S>/: move it there (mv {out} {out}.seed_{seed} && mkdir {out} && mv {out}.seed_{seed} "
+            f"{out}/seed_{seed}) and run again"
+        )
+    _check_same_preset(aggregate, chosen.record(None))
+    for seed in seeds:
+        _check_same_preset(seed_folder(out, seed) / RESULTS_JSON, chosen.record(seed))
+
+
+def _check_same_preset(path: Path, preset: dict[str, Any]) -> None:
+    """InputError when ``path`` (a results.json) was made with another preset, seed or settings."""
     if not path.is_file():
         return
     earlier = {"settings_changes": {}} | json.loads(path.read_text()).get("preset", {})
-    changed = [key for key in ("name", "seed", "settings_changes") if earlier.get(key) != preset[key]]
+    changed = [key for key in ("name", "seed", "settings_changes") if key in preset and earlier.get(key) != preset[key]]
     if changed:
         said = "; ".join(f"{key} {earlier.get(key)!r}, now {preset[key]!r}" for key in changed)
         raise InputError(
@@ -235,46 +290,46 @@ def child_environment(jobs: int) -> dict[str, str]:
 def _run_children(
     chosen: Preset,
     out: Path,
-    seed: int,
+    seeds: Sequence[int],
     methods: Sequence[str],
     jobs: int,
     say: Report,
-    results: Callable[[], object],
+    results: Callable[[int], object],
 ) -> int:
-    """Each experiment in a child ``toolimit reproduce``, ``jobs`` at a time, its output appended to
-    OUT/logs/<experiment>.log (a resumed reproduction keeps the earlier sittings' lines);
-    ``results()`` after each. The children share the terminal's process group, so a Ctrl-C reaches
-    them too: each saves its progress and stops; a signal sent to this process alone is passed on.
-    The exit code: the worst of the children's (an interrupted child interrupts the whole
-    reproduction)."""
-    logs = out / "logs"
-    logs.mkdir(parents=True, exist_ok=True)
-    pending = list(chosen.experiments)
-    running: dict[subprocess.Popen[bytes], Experiment] = {}
+    """Each experiment of each seed in a child ``toolimit reproduce``, ``jobs`` at a time, seed
+    after seed, its output appended to OUT/seed_<S>/logs/<experiment>.log (a resumed reproduction
+    keeps the earlier sittings' lines); ``results(seed)`` after each. The children share the
+    terminal's process group, so a Ctrl-C reaches them too: each saves its progress and stops; a
+    signal sent to this process alone is passed on. The exit code: the worst of the children's (an
+    interrupted child interrupts the whole reproduction)."""
+    pending = [(seed, experiment) for seed in seeds for experiment in chosen.experiments]
+    running: dict[subprocess.Popen[bytes], tuple[int, Experiment]] = {}
     from_preset = set(chosen.experiments) <= set(preset(chosen.name).experiments)
+
     code = 0
     try:
         while pending or running:
             while pending and len(running) < jobs:
-                experiment = pending.pop(0)
+                seed, experiment = pending.pop(0)
                 selector = ["--experiment", experiment.name] if from_preset else ["--demo", str(experiment.demo)]
                 command = [sys.executable, "-m", "toolimit", "reproduce", "--preset", chosen.name, *selector]
                 command += ["--methods", ",".join(methods), "--out", str(out), "--seed", str(seed), "--quiet"]
-                log = logs / f"{experiment.name}.log"
+                log = seed_folder(out, seed) / "logs" / f"{experiment.name}.log"
+                log.parent.mkdir(parents=True, exist_ok=True)
                 with open(log, "a") as output:
                     child = subprocess.Popen(
                         command, stdout=output, stderr=subprocess.STDOUT, env=child_environment(jobs)
                     )
-                running[child] = experiment
-                say(experiment.name, f"started (log: {log})")
+                running[child] = (seed, experiment)
+                say(_label(experiment.name, seed, seeds), f"started (log: {log})")
             time.sleep(0.5)
             for child in [c for c in running if c.poll() is not None]:
-                experiment = running.pop(child)
-                say(experiment.name, f"ended (exit {child.returncode})")
+                seed, experiment = running.pop(child)
+                say(_label(experiment.name, seed, seeds), f"ended (exit {child.returncode})")
                 if child.returncode - 128 in SIGNALS:
                     raise Interrupted(child.returncode - 128)
                 code = max(code, child.returncode)
-                results()
+                results(seed)
     finally:
         for child in running:  # interrupted: pass the signal on, then let each child save and stop
             child.send_signal(SIGNALS[0])

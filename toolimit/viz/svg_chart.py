@@ -1,9 +1,10 @@
 """A grouped bar chart on a log scale as a standalone SVG file, written without matplotlib.
 
 The paper's results figure: for each group (a tool and demonstration) one bar per method, the goal
-reward on a logarithmic axis, and a horizontal line at the success threshold. SVG is text: a browser
-opens it, a diff reads it, and no plotting library is needed. Values <= 0 (nothing delivered) are
-drawn as a short stub at the axis' floor and labelled "0", since a log axis has no zero.
+reward on a logarithmic axis, its interval as a whisker, and a horizontal line at the success
+threshold. SVG is text: a browser opens it, a diff reads it, and no plotting library is needed.
+Values <= 0 (nothing delivered) are drawn as a short stub at the axis' floor and labelled "0", since
+a log axis has no zero; an interval's ends below the floor are drawn at the floor.
 """
 
 from __future__ import annotations
@@ -19,10 +20,12 @@ PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F
 
 @dataclass(frozen=True)
 class BarGroup:
-    """One group of bars: a label and one value per series (None: not measured, no bar)."""
+    """One group of bars: a label, one value per series (None: not measured, no bar) and, if given,
+    one interval (low, high) per series (None: no whisker)."""
 
     label: str
     values: Sequence[float | None]
+    intervals: Sequence[tuple[float, float] | None] = ()
 
 
 def log_bar_chart_svg(
@@ -39,11 +42,15 @@ def log_bar_chart_svg(
     if not groups or not series:
         raise ValueError("a chart needs at least one group and one series")
     for group in groups:
-        if len(group.values) != len(series):
-            raise ValueError(f"group {group.label!r} has {len(group.values)} values for {len(series)} series")
+        if len(group.values) != len(series) or len(group.intervals) not in (0, len(series)):
+            raise ValueError(
+                f"group {group.label!r} has {len(group.values)} values and {len(group.intervals)} intervals "
+                f"for {len(series)} series"
+            )
     if floor <= 0:
         raise ValueError(f"floor must be > 0 on a log axis, got {floor}")
     measured = [v for group in groups for v in group.values if v is not None and v > 0]
+    measured += [span[1] for group in groups for span in group.intervals if span is not None and span[1] > 0]
     top = max(measured + [threshold or floor, floor * 10])
     decades = (math.floor(math.log10(floor)), math.ceil(math.log10(top)))
     left, right, upper, lower = 70.0, 110.0, 40.0, 110.0  # the right margin holds the last tilted label
@@ -79,6 +86,9 @@ def log_bar_chart_svg(
                 f'fill="{PALETTE[s % len(PALETTE)]}"><title>{escape(group.label)}, {escape(series[s])}: '
                 f"{value:g}</title></rect>"
             )
+            span = group.intervals[s] if group.intervals else None
+            if span is not None:
+                parts.append(_whisker(x + bar / 2 - 1, y_of(span[0]), y_of(span[1]), f"{span[0]:g} to {span[1]:g}"))
             if value <= 0:
                 parts.append(f'<text x="{x + bar / 2 - 1:.1f}" y="{y - 3:.1f}" text-anchor="middle">0</text>')
         centre = x0 + len(series) * bar / 2
@@ -106,3 +116,14 @@ def log_bar_chart_svg(
         )
     parts.append("</svg>")
     return "\n".join(parts) + "\n"
+
+
+def _whisker(x: float, y_low: float, y_high: float, label: str) -> str:
+    """A vertical line from ``y_low`` to ``y_high`` at ``x`` with caps (SVG coordinates)."""
+    caps = "".join(
+        f'<line x1="{x - 3:.1f}" x2="{x + 3:.1f}" y1="{y:.1f}" y2="{y:.1f}" stroke="#333"/>' for y in (y_low, y_high)
+    )
+    return (
+        f'<g><title>95 % interval: {escape(label)}</title><line x1="{x:.1f}" x2="{x:.1f}" y1="{y_low:.1f}" '
+        f'y2="{y_high:.1f}" stroke="#333"/>{caps}</g>'
+    )
