@@ -15,7 +15,7 @@ With a draw per episode the spread is that of 20 Bernoulli trials: a policy of s
 about sqrt(p (1 - p) / 20) (0.11 at p = 0.5). It prints one line per policy and writes ``--out``
 (JSON). About 10 s per 3D spade policy on one core, a second or two for the hammer and the scythe.
 
-    python benchmarks/evaluation_noise.py --reproduction runs/reproduce --out benchmarks/results/evaluation_noise.json
+    python benchmarks/evaluation_noise.py --reproduction runs/reproduce/seed_0 --out benchmarks/results/evaluation_noise.json
 """
 
 from __future__ import annotations
@@ -38,7 +38,9 @@ POLICY_FOLDERS = {
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--reproduction", type=Path, required=True, help="a `toolimit reproduce --preset full` folder")
+    parser.add_argument(
+        "--reproduction", type=Path, required=True, help="a seed's folder of a `toolimit reproduce --preset full`"
+    )
     parser.add_argument("--episodes", type=int, default=100, help="episodes of the long evaluation")
     parser.add_argument("--seed", type=int, default=5000, help="seed of the long evaluation")
     parser.add_argument("--batch-seeds", type=int, default=5, help="seeds of the 20-episode evaluation: 1000, 1001, ...")

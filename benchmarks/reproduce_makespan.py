@@ -1,21 +1,29 @@
-"""The full preset's makespan on N Ray nodes, by list scheduling of the measured cells.
+"""The full preset's makespan for several training seeds, on one node and on N Ray nodes.
 
-Reads the per-cell ``wall_time_s`` of a full reproduction (benchmarks/results/reproduce/results.json)
-and schedules ``toolimit reproduce --ray``'s tasks on ``nodes`` x ``cpus`` one-CPU slots, longest
-first among those ready (LPT list scheduling): per experiment a preparation (alignment and robot
-selection: ``--prep-s`` seconds, which results.json does not hold apart; it is inside the final
-cell's time), then its learning runs, released when the preparation ends: the method's (the final
-cell's time less the preparation) and each baseline's. Prints the makespan for 1, 2, 4 and
-``nodes`` nodes and its two lower bounds: the longest single run with its preparation (whatever
-the number of nodes) and the total work divided by the slots.
+Reads the per-cell ``wall_time_s`` of a full reproduction (benchmarks/results/reproduce/results.json,
+either layout; with several seeds, the first's) and takes every seed to do the same work. Two
+schedules:
+
+- one node, ``toolimit reproduce --seed 0,1,2 --jobs J``: each (seed, experiment) one child, in
+  the preset's order, seed after seed in one queue, each started on the first of J slots to free;
+  a child's time is its experiment's cells' times added up (the final cell's holds the whole
+  ``toolimit run``: the alignment, the selection, the learning);
+- N Ray nodes of ``cpus`` CPUs: ``toolimit reproduce --ray``'s tasks on N x cpus one-CPU slots,
+  longest first among those ready (LPT list scheduling): per experiment a preparation (alignment
+  and robot selection: ``--prep-s`` seconds, which results.json does not hold apart; it is inside
+  the final cell's time), then its learning runs, released when the preparation ends: the method's
+  (the final cell's time less the preparation) and each baseline's. Once with the seeds one after
+  another (one command: it runs its seeds in turn) and once all at once (one command per seed,
+  started side by side), with the two lower bounds of the latter: the longest single run with its
+  preparation, and the total work divided by the slots.
 
 The cells' times were measured two or three runs at a time on two cores (docs/results/paper_figure.md, "The paper's
 experiments"), not one at a time on an idle machine: a run alone on its own core is, if anything,
-faster, so the figure is an upper estimate for nodes as fast as this machine's cores. The domain
+faster, so the figures are upper estimates for nodes as fast as this machine's cores. The domain
 randomisation runs (``toolimit learn --adr``) are one learning run each, which no cluster splits:
 they are listed apart with their own wall time.
 
-    python benchmarks/reproduce_makespan.py [--nodes 8] [--cpus 2] [--prep-s 100]
+    python benchmarks/reproduce_makespan.py [--seeds 3] [--jobs 2] [--nodes 8] [--cpus 2] [--prep-s 100]
 """
 
 from __future__ import annotations
@@ -24,6 +32,9 @@ import argparse
 import heapq
 import json
 from pathlib import Path
+
+from toolimit.experiments.report import read_results
+from toolimit.experiments.reproduce import preset
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "reproduce" / "results.json"
@@ -46,6 +57,30 @@ def tasks(cells: list[dict], preparation_s: float) -> list[tuple[str, str, float
             seconds = cell["wall_time_s"] - preparation_s if cell["method"] == "final" else cell["wall_time_s"]
             found.append((name, cell["method"], seconds))
     return found
+
+
+def for_seeds(work: list[tuple[str, str, float]], seeds: int) -> list[tuple[str, str, float]]:
+    """``work`` once per seed, each experiment named with its seed."""
+    return [(f"seed_{seed}/{name}", task, seconds) for seed in range(seeds) for name, task, seconds in work]
+
+
+def children(cells: list[dict]) -> list[float]:
+    """Each experiment's time as one child of ``toolimit reproduce --jobs``: its cells' times added
+    up, in the full preset's order."""
+    seconds: dict[tuple[str, str, str], float] = {}
+    for cell in cells:
+        key = (cell["tool"], cell["robot"], cell["demo"])
+        seconds[key] = seconds.get(key, 0.0) + cell["wall_time_s"]
+    order = [(e.tool, e.robot, e.demo.stem) for e in preset("full").experiments]
+    return [seconds[key] for key in sorted(seconds, key=lambda key: order.index(key) if key in order else len(order))]
+
+
+def in_order(durations: list[float], slots: int) -> float:
+    """End of the last of ``durations`` run in their order, each on the first of ``slots`` to free."""
+    free = [0.0] * slots
+    for seconds in durations:
+        heapq.heappush(free, heapq.heappop(free) + seconds)
+    return max(free)
 
 
 def makespan(work: list[tuple[str, str, float]], slots: int) -> float:
@@ -72,27 +107,41 @@ def makespan(work: list[tuple[str, str, float]], slots: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=3, help="training seeds, each the same work")
+    parser.add_argument("--jobs", type=int, default=2, help="children at a time on one node")
     parser.add_argument("--nodes", type=int, default=8)
     parser.add_argument("--cpus", type=int, default=2, help="CPUs per node (one learning run each)")
     parser.add_argument("--prep-s", type=float, default=PREPARATION_S, help="an experiment's preparation, s")
     parser.add_argument("--results", type=Path, default=RESULTS)
     args = parser.parse_args()
-    cells = json.loads(args.results.read_text())["cells"]
+    _, runs = read_results(json.loads(args.results.read_text()))
+    seed = min(runs)
+    cells = [cell.record() for cell in runs[seed]]
     work = tasks(cells, args.prep_s)
-    slots = args.nodes * args.cpus
-    longest = max(work, key=lambda w: w[2] + (args.prep_s if w[1] != "prepare" else 0.0))
     total = sum(seconds for _, _, seconds in work)
     print(
-        f"{args.results.relative_to(REPO) if args.results.is_relative_to(REPO) else args.results}: {len(cells)} cells, "
-        f"{len(work)} tasks ({sum(w[1] == 'prepare' for w in work)} preparations of {args.prep_s:.0f} s)"
+        f"{args.results.relative_to(REPO) if args.results.is_relative_to(REPO) else args.results}: seed {seed}'s "
+        f"{len(cells)} cells, {len(work)} tasks ({sum(w[1] == 'prepare' for w in work)} preparations of "
+        f"{args.prep_s:.0f} s), {total / 3600:.2f} h of work a seed; {args.seeds} seeds: {args.seeds * total / 3600:.2f} h"
     )
-    print(f"one slot: {total / 3600:.2f} h of work")
-    for nodes in sorted({1, 2, 4, args.nodes}):
-        span = makespan(work, nodes * args.cpus)
-        print(f"{nodes} node(s) x {args.cpus} CPUs: makespan {span / 60:.1f} min")
+    local = children(cells)
     print(
-        f"bounds from below on {args.nodes} x {args.cpus} CPUs: the longest single run, {longest[0]} {longest[1]}, "
-        f"{(longest[2] + args.prep_s) / 60:.1f} min with its preparation; the work per slot, {total / slots / 60:.1f} min"
+        f"one node, --jobs {args.jobs}: one seed {in_order(local, args.jobs) / 60:.0f} min, "
+        f"{args.seeds} seeds {in_order(local * args.seeds, args.jobs) / 60:.0f} min"
+    )
+    every = for_seeds(work, args.seeds)
+    for nodes in sorted({1, 2, 4, args.nodes}):
+        slots = nodes * args.cpus
+        print(
+            f"{nodes} Ray node(s) x {args.cpus} CPUs: one seed {makespan(work, slots) / 60:.1f} min; {args.seeds} seeds "
+            f"one after another {args.seeds * makespan(work, slots) / 60:.1f} min, side by side "
+            f"{makespan(every, slots) / 60:.1f} min"
+        )
+    longest = max(work, key=lambda w: w[2] + (args.prep_s if w[1] != "prepare" else 0.0))
+    print(
+        f"bounds from below, {args.seeds} seeds side by side on {args.nodes} x {args.cpus} CPUs: the longest single "
+        f"run, {longest[0]} {longest[1]}, {(longest[2] + args.prep_s) / 60:.1f} min with its preparation; the work "
+        f"per slot, {args.seeds * total / (args.nodes * args.cpus) / 60:.1f} min"
     )
     print("apart (one learning run each, not split by a cluster):")
     for folder in ADR_RUNS:

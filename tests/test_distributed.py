@@ -112,7 +112,7 @@ def test_an_interrupted_reproduction_on_ray_keeps_its_cells_ends_every_process_a
     with open(log, "wb") as output:
         process = subprocess.Popen(command, cwd=REPO, stdout=output, stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        prepared = out / "cells" / f"{EXPERIMENT}-trajopt.json"
+        prepared = out / "seed_0" / "cells" / f"{EXPERIMENT}-trajopt.json"
         deadline = time.monotonic() + 300
         while not prepared.is_file() and process.poll() is None and time.monotonic() < deadline:
             time.sleep(0.1)
@@ -129,7 +129,7 @@ def test_an_interrupted_reproduction_on_ray_keeps_its_cells_ends_every_process_a
     said = log.read_text()
     assert code == 130, said
     assert "interrupted (SIGINT)" in said and "final: interrupted on 127.0.0.1/" in said, said
-    assert {p.name for p in (out / "cells").glob("*.json")} == {
+    assert {p.name for p in (out / "seed_0" / "cells").glob("*.json")} == {
         f"{EXPERIMENT}-tool_only.json",
         f"{EXPERIMENT}-trajopt.json",
     }

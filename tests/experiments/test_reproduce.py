@@ -14,6 +14,7 @@ from toolimit.cli import main as toolimit
 from toolimit.errors import BaseInsideFootprint
 from toolimit.experiments.cells import METHODS, CellResult
 from toolimit.experiments.report import markdown_table
+from toolimit.experiments.summary import summarise_cells
 from toolimit.learn.kinesthetic import SELECTION_JSON
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.pipeline.settings import PipelineSettings
@@ -54,7 +55,7 @@ def test_every_method_has_a_cell_with_the_figures_fields(quick_results: Path) ->
 
 
 def test_lfd_learns_from_a_scripted_scoop_the_robot_delivers_in_the_methods_scene(quick_results: Path) -> None:
-    folder = quick_results / EXPERIMENT / "lfd"
+    folder = quick_results / "seed_0" / EXPERIMENT / "lfd"
     method, lfd = (LearningTask.load(folder / name / TASK_NPZ) for name in ("../method/learning", "."))
     for name, value in method.params.items():
         np.testing.assert_array_equal(lfd.params[name], value)
@@ -63,8 +64,8 @@ def test_lfd_learns_from_a_scripted_scoop_the_robot_delivers_in_the_methods_scen
     configs = [
         json.loads((folder / "learning.json").read_text())["config"]
         for folder in (
-            quick_results / EXPERIMENT / "lfd" / "learning",
-            quick_results / EXPERIMENT / "method" / "learning",
+            quick_results / "seed_0" / EXPERIMENT / "lfd" / "learning",
+            quick_results / "seed_0" / EXPERIMENT / "method" / "learning",
         )
     ]
     assert configs[0] == configs[1]  # exactly the method's learning flags
@@ -80,7 +81,7 @@ def test_the_table_and_the_figure_are_written(quick_results: Path) -> None:
 def test_a_second_run_skips_saved_cells_and_a_removed_cell_comes_back_the_same(
     quick_results: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    removed = quick_results / "cells" / f"{EXPERIMENT}-trajopt.json"
+    removed = quick_results / "seed_0" / "cells" / f"{EXPERIMENT}-trajopt.json"
     before = CellResult.load(removed)
     removed.unlink()
     with pytest.MonkeyPatch.context() as patch:
@@ -93,16 +94,24 @@ def test_a_second_run_skips_saved_cells_and_a_removed_cell_comes_back_the_same(
 
 def test_markdown_marks_unmeasured_methods() -> None:
     cell = CellResult("hammer", "3d", "panda", "hammer_00", "final", 1.0, 1.0, [1.0], 10, 1.0)
-    row = "| hammer | 3d | panda | hammer_00 | - | - | 1.0 (1.00) | - | - | - | - | - |"
-    assert markdown_table([cell]).splitlines()[-1] == row
+    row = "| hammer | 3d | panda | hammer_00 | - | - | 1.0 [1.0, 1.0] (1.00 [1.00, 1.00]) | - | - | - | - | - |"
+    assert markdown_table(summarise_cells({0: [cell]}), [0]).splitlines()[-1] == row
 
 
 def test_markdown_shows_the_final_policys_limits_and_its_export() -> None:
-    limits = {"share_of_steps_past_limits": 0.25, "max_velocity_ratio": 0.95, "max_acceleration_ratio": 3.5}
-    exported = {"goal_reward_mean": 12.5, "success_rate": 0.9}
-    cell = CellResult("spade", "3d", "panda", "spade_00", "final", 15.0, 1.0, [15.0], 10, 1.0, limits, exported)
-    row = "| spade | 3d | panda | spade_00 | - | - | 15.0 (1.00) | - | - | - | 0.25 (0.95, 3.50) | 12.5 (0.90) |"
-    assert markdown_table([cell]).splitlines()[-1] == row
+    limits = {
+        "share_of_steps_past_limits": 0.25,
+        "max_velocity_ratio": 0.95,
+        "max_acceleration_ratio": 3.5,
+        "share_of_steps_past_limits_per_episode": [0.25, 0.25],
+    }
+    exported = {"goal_reward_mean": 12.5, "success_rate": 0.5, "episodes": 2, "goal_reward": [12.5, 12.5]}
+    cell = CellResult("spade", "3d", "panda", "spade_00", "final", 15.0, 1.0, [15.0, 15.0], 10, 1.0, limits, exported)
+    row = (
+        "| spade | 3d | panda | spade_00 | - | - | 15.0 [15.0, 15.0] (1.00 [1.00, 1.00]) | - | - | - | "
+        "0.25 [0.25, 0.25] (0.95, 3.50) | 12.5 [12.5, 12.5] (0.50 [0.00, 1.00]) |"
+    )
+    assert markdown_table(summarise_cells({0: [cell]}), [0]).splitlines()[-1] == row
 
 
 def test_a_robot_that_cannot_track_the_scripted_motion_leaves_the_lfd_cell_missing(
@@ -110,8 +119,8 @@ def test_a_robot_that_cannot_track_the_scripted_motion_leaves_the_lfd_cell_missi
 ) -> None:
     out = tmp_path / "reproduce"
     shutil.copytree(quick_results, out)
-    (out / "cells" / f"{EXPERIMENT}-lfd.json").unlink()
-    shutil.rmtree(out / EXPERIMENT / "lfd")
+    (out / "seed_0" / "cells" / f"{EXPERIMENT}-lfd.json").unlink()
+    shutil.rmtree(out / "seed_0" / EXPERIMENT / "lfd")
 
     def refuse(*args, **kwargs):
         raise BaseInsideFootprint("every one of the 4 solutions puts the robot base inside a scene element")
@@ -145,14 +154,14 @@ def test_methods_measures_only_the_named_cells_and_a_later_run_adds_the_others(
     out = tmp_path / "reproduce"
     shutil.copytree(quick_results, out)
     for method in ("trajopt", "dense_ppo"):
-        (out / "cells" / f"{EXPERIMENT}-{method}.json").unlink()
+        (out / "seed_0" / "cells" / f"{EXPERIMENT}-{method}.json").unlink()
     monkeypatch.chdir(REPO)
     assert toolimit(["reproduce", "--preset", "quick", "--methods", "dense_ppo", "--out", str(out), "--quiet"]) == 0
-    assert not (out / "cells" / f"{EXPERIMENT}-trajopt.json").exists()
-    assert (out / "cells" / f"{EXPERIMENT}-dense_ppo.json").is_file()
+    assert not (out / "seed_0" / "cells" / f"{EXPERIMENT}-trajopt.json").exists()
+    assert (out / "seed_0" / "cells" / f"{EXPERIMENT}-dense_ppo.json").is_file()
     assert toolimit(["reproduce", "--preset", "quick", "--out", str(out), "--quiet"]) == 0
-    assert CellResult.load(out / "cells" / f"{EXPERIMENT}-trajopt.json") == CellResult.load(
-        quick_results / "cells" / f"{EXPERIMENT}-trajopt.json"
+    assert CellResult.load(out / "seed_0" / "cells" / f"{EXPERIMENT}-trajopt.json") == CellResult.load(
+        quick_results / "seed_0" / "cells" / f"{EXPERIMENT}-trajopt.json"
     )
 
 
@@ -216,10 +225,10 @@ def test_jobs_run_experiments_in_child_processes_with_the_same_cells_as_one_proc
     said = capsys.readouterr().out
     for name in (EXPERIMENT, EXPERIMENT.replace("spade_03", "spade_01")):
         assert f"[{name}] ended (exit 0)" in said
-        assert f"[{name}] [learning] started" in (out / "logs" / f"{name}.log").read_text()
+        assert f"[{name}] [learning] started" in (out / "seed_0" / "logs" / f"{name}.log").read_text()
     for method in ("tool_only", "trajopt", "final"):
         key = f"{EXPERIMENT}-{method}.json"
-        alone, in_child = CellResult.load(quick_results / "cells" / key), CellResult.load(out / "cells" / key)
+        alone, in_child = (CellResult.load(folder / "seed_0" / "cells" / key) for folder in (quick_results, out))
         np.testing.assert_allclose(in_child.goal_rewards, alone.goal_rewards, rtol=1e-6, atol=1e-6)
         assert in_child.success_rate == alone.success_rate
     cells = json.loads((out / "results.json").read_text())["cells"]
@@ -251,12 +260,13 @@ def test_a_two_node_ray_cluster_measures_the_cells_of_a_local_run(
     for method in ("tool_only", "trajopt", "final", "lfd"):
         assert re.search(rf"\] {method}: goal reward .* \(node 127\.0\.0\.1/\w+, \d+ s\)", said), said
         key = f"{EXPERIMENT}-{method}.json"
-        alone, on_ray = CellResult.load(quick_results / "cells" / key), CellResult.load(out / "cells" / key)
+        alone, on_ray = (CellResult.load(folder / "seed_0" / "cells" / key) for folder in (quick_results, out))
         np.testing.assert_allclose(on_ray.goal_rewards, alone.goal_rewards, rtol=1e-6, atol=1e-6)
         assert (on_ray.success_rate, on_ray.env_steps) == (alone.success_rate, alone.env_steps)
     assert "/tmp/toolimit-task-" not in said  # the lines name the driver's folders
-    assert (out / EXPERIMENT / "lfd" / "learning" / "policy.safetensors").is_file()  # the tasks' files came back
-    assert (out / EXPERIMENT / "method" / "evaluation.json").is_file()
+    experiment = out / "seed_0" / EXPERIMENT
+    assert (experiment / "lfd" / "learning" / "policy.safetensors").is_file()  # the tasks' files came back
+    assert (experiment / "method" / "evaluation.json").is_file()
 
 
 def test_each_child_run_gets_its_share_of_the_cores_for_its_threads(monkeypatch):
@@ -309,15 +319,19 @@ def test_the_full_figure_learns_with_the_authors_span_of_the_action():
 def test_results_of_another_seed_or_preset_are_not_taken_for_this_reproductions(quick_results, tmp_path, capsys):
     out = tmp_path / "figure"
     shutil.copytree(quick_results, out)
-    with pytest.MonkeyPatch.context() as patch:
-        patch.chdir(REPO)
-        code = toolimit(["reproduce", "--preset", "quick", "--seed", "1", "--out", str(out), "--quiet"])
-    assert code == 2
-    said = capsys.readouterr().err.strip().splitlines()
-    assert said == [
-        f"toolimit reproduce: error: {out / 'results.json'}: these results were made with another seed "
-        "(seed 0, now 1); choose another output folder"
-    ]
+    shutil.copytree(out / "seed_0", out / "seed_1")  # a seed's folder holding another seed's results
     before = json.loads((quick_results / "results.json").read_text())
-    assert json.loads((out / "results.json").read_text()) == before, "nothing written"
-    assert before["preset"] == {"name": "quick", "quick": True, "seed": 0, "settings_changes": {}}
+    for flags, path, said in (
+        (["--preset", "planar"], out / "results.json", "another name (name 'quick', now 'planar')"),
+        (["--preset", "quick", "--seed", "1"], out / "seed_1" / "results.json", "another seed (seed 0, now 1)"),
+    ):
+        with pytest.MonkeyPatch.context() as patch:
+            patch.chdir(REPO)
+            assert toolimit(["reproduce", *flags, "--out", str(out), "--quiet"]) == 2
+        assert capsys.readouterr().err.strip().splitlines() == [
+            f"toolimit reproduce: error: {path}: these results were made with {said}; choose another output folder"
+        ]
+        assert json.loads((out / "results.json").read_text()) == before, "nothing written"
+    assert before["preset"] == {"name": "quick", "quick": True, "settings_changes": {}} and before["seeds"] == [0]
+    seed_0 = json.loads((out / "seed_0" / "results.json").read_text())["preset"]
+    assert seed_0 == {"name": "quick", "quick": True, "seed": 0, "settings_changes": {}}

@@ -165,7 +165,7 @@ def reproduce(
     def results(seed: int) -> list[Path]:
         folder = seed_folder(out, seed)
         written = write_results(folder, {seed: _cells(folder)}, chosen.record(seed))
-        every = {int(f.name.removeprefix("seed_")): _cells(f) for f in sorted(out.glob("seed_*")) if f.is_dir()}
+        every = {seed: _cells(folder) for seed, folder in _seed_folders(out).items()}
         return written + write_results(out, every, chosen.record(None))
 
     def said(seed: int) -> Report:
@@ -197,6 +197,12 @@ def _label(name: str, seed: int, seeds: Sequence[int]) -> str:
     return name if len(seeds) == 1 else f"seed_{seed}/{name}"
 
 
+def _seed_folders(out: Path) -> dict[int, Path]:
+    """The seed folders in ``out`` by seed, ascending."""
+    found = {int(f.name.removeprefix("seed_")): f for f in out.glob("seed_*") if f.name[5:].isdigit() and f.is_dir()}
+    return dict(sorted(found.items()))
+
+
 def _cells(folder: Path) -> list[CellResult]:
     """The cells saved in ``folder``/cells."""
     return [CellResult.load(path) for path in sorted((folder / "cells").glob("*.json"))]
@@ -204,8 +210,9 @@ def _cells(folder: Path) -> list[CellResult]:
 
 def _check_folders(out: Path, chosen: Preset, seeds: Sequence[int]) -> None:
     """InputError when ``out`` is a folder of the earlier single-seed layout, or holds the results of
-    another preset or settings, or a seed's folder those of another seed: their cells would be taken
-    for this reproduction's."""
+    another preset or settings, or a seed's folder (one of ``seeds``, or one already there, which
+    the results take too) those of another seed: their cells would be taken for this
+    reproduction's."""
     aggregate = out / RESULTS_JSON
     earlier = json.loads(aggregate.read_text()).get("preset", {}) if aggregate.is_file() else {}
     if (out / "cells").is_dir() or "seed" in earlier:
@@ -216,7 +223,7 @@ def _check_folders(out: Path, chosen: Preset, seeds: Sequence[int]) -> None:
             f"{out}/seed_{seed}) and run again"
         )
     _check_same_preset(aggregate, chosen.record(None))
-    for seed in seeds:
+    for seed in sorted(set(seeds) | set(_seed_folders(out))):  # those asked for, and those the results take
         _check_same_preset(seed_folder(out, seed) / RESULTS_JSON, chosen.record(seed))
 
 
