@@ -51,9 +51,24 @@ def test_the_threshold_line_is_drawn_and_labelled():
     assert not [line for line in chart([BarGroup("a", [1, 2, 3])], None).iter(f"{SVG}line") if line.get("stroke") == "red"]
 
 
+def test_an_interval_is_a_whisker_on_its_bar_from_low_to_high():
+    root = chart([BarGroup("a", [1.0, 10.0, 0.0], [(0.5, 2.0), None, (0.0, 0.4)])])
+    whiskers = [g for g in root.iter(f"{SVG}g") if g.find(f"{SVG}title").text.startswith("95 % interval")]
+    assert [g.find(f"{SVG}title").text for g in whiskers] == ["95 % interval: 0.5 to 2", "95 % interval: 0 to 0.4"]
+    (_, one_top, _, _), *_ = bars(root)
+    stem = whiskers[0].find(f"{SVG}line")
+    low, high = float(stem.get("y1")), float(stem.get("y2"))
+    assert high < one_top < low  # around the bar's top: 2 above it, 0.5 below
+    assert float(whiskers[1].find(f"{SVG}line").get("y1")) == pytest.approx(300.0)  # 0 drawn at the axis' floor
+
+
 @pytest.mark.parametrize(
     ("groups", "message"),
-    [([], "at least one group"), ([BarGroup("a", [1.0])], "group 'a' has 1 values for 3 series")],
+    [
+        ([], "at least one group"),
+        ([BarGroup("a", [1.0])], "group 'a' has 1 values and 0 intervals for 3 series"),
+        ([BarGroup("a", [1.0, 2.0, 3.0], [(0.5, 1.5)])], "group 'a' has 3 values and 1 intervals for 3 series"),
+    ],
 )
 def test_bad_input_is_refused(groups, message):
     with pytest.raises(ValueError, match=message):

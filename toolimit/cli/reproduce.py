@@ -5,7 +5,7 @@ preset runs and where each cell goes). ``--demo`` replaces the preset's demonstr
 ``--experiment`` keeps some of its experiments and ``--methods`` some of the methods (e.g. the method
 and the sparse baseline first, ``--methods final,sparse_ppo``; the others on a later run into the
 same folder). ``--jobs N`` runs N experiments at a time, each in a child process whose output goes
-to OUT/logs/<experiment>.log. ``--ray [ADDRESS]`` runs them on a Ray cluster instead
+to OUT/seed_<S>/logs/<experiment>.log. ``--ray [ADDRESS]`` runs them on a Ray cluster instead
 (:mod:`toolimit.experiments.on_cluster`), the log naming the node of each cell. ``--seed 0,1,2``
 runs several training seeds, each a reproduction of its own in OUT/seed_<S>/, and OUT/results.*
 put them side by side, each cell with its intervals over seeds and episodes. Exit codes: 0 done, 1 an experiment's pipeline found nothing or its

@@ -125,7 +125,7 @@ def results_markdown(
     summaries: Sequence[CellSummary], aggregates: Sequence[MethodSummary], seeds: Sequence[int]
 ) -> str:
     """``results.md``: both tables, with how to read them."""
-    over = f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {', '.join(map(str, seeds))}"
+    over = f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}" if seeds else "no seed yet"
     return (
         f"# Results over {over}\n\n"
         "Goal reward (success rate) per method: the mean over seeds of each seed's mean over its "
@@ -176,4 +176,5 @@ def write_results(out_dir: Path, runs: Runs, preset: dict[str, Any]) -> list[Pat
 
 
 def _span(interval: Interval) -> tuple[float, float] | None:
+    """The chart's whisker of ``interval``: (low, high), or None with no interval."""
     return None if interval.low is None or interval.high is None else (interval.low, interval.high)
