@@ -13,8 +13,8 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    moves in a plane (``fit_plane_normal``): every point of a tool in planar motion keeps its
    distance from the head's plane, so the plane's turn is the one of ``PLANE_TURNS`` under which
    the lifted handle end's distance from the head's plane varies least (:func:`fit_plane_turn`).
-   Where no tool of the given length joins the lifted head to the handle's rays in many frames, the plane is wrong and the
-   lift refuses.
+   Where no tool of the given length joins the lifted head to the handle's rays in many frames,
+   the plane is wrong and the lift refuses.
 2. **The head** is its ray's intersection with that plane (closed form).
 3. **The handle end** lies on its own ray at the tool's length from the head: two solutions, the
    near one (nearer to the camera than the foot of the head on that ray) and the far one, at a signed
