@@ -112,6 +112,7 @@ LIFT_FLAGS = (
         parse=_direction,
         show=lambda normal: "the camera's viewing direction" if normal is None else str(normal),
     ),
+    Flag("fit_plane_normal"),
     Flag("contact_share"),
     Flag("pixel_noise"),
     Flag("smoothing", show=lambda width: "chosen for each end by cross-validation" if width is None else str(width)),
@@ -212,7 +213,8 @@ def run_lift(args: argparse.Namespace) -> int:
     demo = replace(lifted.demo, source=f"lifted from {args.tracks} seen by {args.camera}")
     write_lifted(lifted, demo, args.out)
     print(
-        f"wrote {args.out}: {summary(demo)}; working plane {lifted.plane_distance:.2f} m from the camera; "
+        f"wrote {args.out}: {summary(demo)}; working plane {lifted.plane_distance:.2f} m from the camera, "
+        f"its normal turned {lifted.plane_turn:+.0f} deg from the camera's viewing direction; "
         f"filled in: head {int(lifted.head_filled.sum())}, handle end {int(lifted.handle_filled.sum())} frames"
     )
     print(side_summary(lifted.side_source, lifted.side_margin, lifted.mirror_distance))

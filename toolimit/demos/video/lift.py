@@ -9,9 +9,12 @@ reprojection error, tool length and smoothness alone was ill-posed here, 0.65-3 
    touches the ground: a head ray that points below the horizon meets the ground z = 0 at a
    horizontal distance ``d``; a head on or above the ground lies no farther than that, so the
    plane is as far as the nearest such meetings (the mean of the lowest ``contact_share`` of them).
-   Or it is given: a known point of the plane (the hammer's nail). Where no tool of the given
-   length joins the lifted head to the handle's rays in many frames, the plane is wrong and the
-   lift refuses.
+   Or it is given: a known point of the plane (the hammer's nail). Or the user says the whole tool
+   moves in a plane (``fit_plane_normal``): every point of a tool in planar motion keeps its
+   distance from the head's plane, so the plane's turn is the one of ``PLANE_TURNS`` under which
+   the lifted handle end's distance from the head's plane varies least (:func:`fit_plane_turn`).
+   Where no tool of the given length joins the lifted head to the handle's rays in many frames,
+   the plane is wrong and the lift refuses.
 2. **The head** is its ray's intersection with that plane (closed form).
 3. **The handle end** lies on its own ray at the tool's length from the head: two solutions, the
    near one (nearer to the camera than the foot of the head on that ray) and the far one, at a signed
@@ -71,6 +74,10 @@ NEGLIGIBLE_OFFSET = 0.005
 MISS_MARGIN, MAX_MISSED_SHARE = 0.05, 0.2
 #: Where each frame's side comes from (``LiftedDemo.side_source``).
 SIDE_SOURCES = ("hint", "crossing", "negligible")
+#: The plane turns (degrees from facing the camera) ``fit_plane_normal`` chooses from: a plane seen
+#: nearer edge-on than ``MAX_PLANE_ANGLE`` is refused anyway, and a best turn at either end of the
+#: range is no minimum.
+PLANE_TURNS = tuple(range(-70, 71, 5))
 #: The pixel filter widths (frames, Gaussian standard deviation) cross-validation chooses from:
 #: 0.5 to 8 frames in steps of sqrt(2).
 PIXEL_WIDTHS = tuple(0.5 * 2 ** (k / 2) for k in range(9))
@@ -91,6 +98,9 @@ class LiftSettings:
             not matter): how the motion is turned, which one view cannot tell and the user knows,
             say from a calibration board laid along the motion (None: the camera's viewing
             direction made horizontal, a camera facing the motion).
+        fit_plane_normal: the whole tool moves in a plane (not just its head): the plane's normal
+            is fitted from the tracks (:func:`fit_plane_turn`) instead of facing the camera; not
+            with ``plane_normal``.
         contact_share: share of the head's frames taken as its ground contacts (the nearest
             ray-ground meetings).
         pixel_noise: standard deviation of the tracks' pixel error, for the per-frame uncertainty.
@@ -107,6 +117,7 @@ class LiftSettings:
     tool_length: float | None = None
     plane_point: tuple[float, float, float] | None = None
     plane_normal: tuple[float, float] | None = None
+    fit_plane_normal: bool = False
     contact_share: float = 0.05
     pixel_noise: float = 3.0
     smoothing: float | None = None
@@ -130,6 +141,8 @@ class LiftSettings:
             raise InvalidSetting(
                 "plane_normal", f"expected two finite coordinates x, y, not both 0, got {self.plane_normal!r}"
             )
+        if self.fit_plane_normal and self.plane_normal is not None:
+            raise InvalidSetting("fit_plane_normal", "give either plane_normal or fit_plane_normal, not both")
         if not 0 < self.contact_share <= 1:
             raise InvalidSetting("contact_share", f"must be in (0, 1], got {self.contact_share!r}")
         if not (math.isfinite(self.pixel_noise) and self.pixel_noise >= 0):
@@ -166,6 +179,8 @@ class LiftedDemo:
         mirror_distance: (T,) metres between the handle end and its mirror solution (twice the
             depth offset): the error of a frame on the wrong side.
         plane_normal: (3,) horizontal unit normal of the working plane, pointing away from the camera.
+        plane_turn: the plane's normal's turn from the camera's viewing direction made horizontal,
+            degrees (counter-clockwise seen from above).
         plane_distance: the plane's distance from the camera's centre along that normal, metres.
         hint_used: whether any frame's side came from ``handle_hint`` alone.
         pixel_smoothing: the pixel filter's width for the head and for the handle end, frames.
@@ -182,6 +197,7 @@ class LiftedDemo:
     mirror_distance: np.ndarray
     plane_normal: np.ndarray
     plane_distance: float
+    plane_turn: float
     hint_used: bool
     pixel_smoothing: tuple[float, float]
 
@@ -237,8 +253,10 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     Raises:
         TrackError: too few visible frames, a camera not above the ground or looking straight
             down, a camera that sees no ground, a plane seen nearly edge-on or that no tool of the
-            given length fits, a mirror ambiguity without a hint.
+            given length fits, a mirror ambiguity without a hint, no fitted plane turn.
     """
+    if settings.fit_plane_normal:
+        return fit_plane_turn(tracks, camera, tool, fps, settings)
     from toolimit.tools import tool_spec
 
     length = settings.tool_length if settings.tool_length is not None else tool_spec(tool).length
@@ -252,6 +270,7 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
     if np.linalg.norm(forward[:2]) < 1e-3:
         raise TrackError("camera: it looks straight up or down; the lift needs a camera facing the working plane")
     normal = _plane_normal(forward, settings.plane_normal)
+    facing = _plane_normal(forward, None)
 
     head_frames = np.flatnonzero(tracks.head_visible)
     head_rays = camera.rays(tracks.head[head_frames])
@@ -295,9 +314,57 @@ def lift_tracks(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, s
         mirror_distance=_filled(2 * offset[:, None], handle_frames, tracks.n_frames)[:, 0],
         plane_normal=normal,
         plane_distance=distance,
+        plane_turn=math.degrees(math.atan2(float(np.cross(facing, normal)[2]), float(facing @ normal))),
         hint_used=settings.handle_hint is not None and bool(np.any(sides.source == "hint")),
         pixel_smoothing=widths,
     )
+
+
+def fit_plane_turn(tracks: EndpointTracks, camera: Camera, tool: str, fps: float, settings: LiftSettings) -> LiftedDemo:
+    """The lift of ``tracks`` (:func:`lift_tracks`) through the working plane turned by the one of
+    ``PLANE_TURNS`` (degrees from facing the camera) under which the lifted handle end's signed
+    distance from the head's plane has the least standard deviation over the frames.
+
+    Why: one view cannot tell how a vertical plane is turned, and the plane facing the camera puts
+    a head that moves along a turned plane tens of centimetres off. A tool that moves in a plane
+    (a rigid planar motion: each of its points moves parallel to the head's plane) keeps its handle
+    end at one distance from the head's plane; through a wrongly turned plane the lifted handle end
+    leaves it and returns as the tool turns. The head's path alone cannot tell: a plane's image is
+    consistent with any turn.
+
+    Raises:
+        TrackError: every turn refused, or the best at either end of ``PLANE_TURNS`` (no minimum
+            inside the range: the motion is not planar, or the plane is seen too near edge-on).
+    """
+    forward = camera.rotation[:, 2]
+    if np.linalg.norm(forward[:2]) < 1e-3:
+        raise TrackError("camera: it looks straight up or down; the lift needs a camera facing the working plane")
+    facing = forward[:2] / np.linalg.norm(forward[:2])
+    best: tuple[float, LiftedDemo] | None = None
+    last_error: TrackError | None = None
+    for turn in PLANE_TURNS:
+        c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+        normal = (float(c * facing[0] - s * facing[1]), float(s * facing[0] + c * facing[1]))
+        try:
+            lifted = lift_tracks(
+                tracks, camera, tool, fps, replace(settings, fit_plane_normal=False, plane_normal=normal)
+            )
+        except TrackError as error:
+            last_error = error
+            continue
+        spread = float(np.std((lifted.demo.handle - lifted.demo.head) @ lifted.plane_normal))
+        if best is None or spread < best[0]:
+            best = (spread, lifted)
+    if best is None:
+        raise TrackError(f"tracks: no plane turn from {PLANE_TURNS[0]} to {PLANE_TURNS[-1]} deg lifts: {last_error}")
+    lifted = best[1]
+    if round(lifted.plane_turn) in (PLANE_TURNS[0], PLANE_TURNS[-1]):
+        raise TrackError(
+            f"tracks: the fitted plane turn is at the end of its range ({lifted.plane_turn:.0f} deg from facing "
+            "the camera): the tool's motion is not planar or its plane is seen nearly edge-on; give its plane's "
+            "normal (--plane-normal x,y)"
+        )
+    return lifted
 
 
 def _nearest(frames: np.ndarray, n_frames: int) -> np.ndarray:
