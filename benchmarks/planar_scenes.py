@@ -92,7 +92,7 @@ def main() -> None:
         ("spade", "scripted scoop", {"sand_position": np.zeros(3), "goal_position": np.array([0.8, 0, 0])},
          spade_scoop()),
         ("hammer", "scripted strikes", {"nail_position": np.array([0.5, 0.0, 0.3])}, hammer_strikes()),
-        ("scythe", "scripted sweeps", {"grass_position": np.array([0.6, 0.5, 0.0]), "grass_yaw": 0.0}, scythe_sweeps()),
+        ("scythe", "scripted sweeps", {"grass_position": np.array([0.6, 0.5, 0.0])}, scythe_sweeps()),
     ]
     real = real_spade()
     if real is not None:

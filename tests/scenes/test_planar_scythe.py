@@ -16,7 +16,7 @@ GRASS = np.array([1.0, 0.5, 0.0])
 
 
 def run(scene, poses: ToolPose, batch_size: int = 2, seed: int = 0) -> None:
-    scene.reset({"grass_position": GRASS, "grass_yaw": 0.0}, np.random.default_rng(seed), batch_size)
+    scene.reset({"grass_position": GRASS}, np.random.default_rng(seed), batch_size)
     for position, rotation in zip(poses.position, poses.rotation):
         scene.step(ToolPose(position, rotation))
 
@@ -33,7 +33,7 @@ def test_registry_builds_a_scene_with_the_protocol_at_the_authors_size():
     scene = make_scene("scythe", "planar")
     assert isinstance(scene, Scene) and isinstance(scene, PlanarScytheScene)
     assert (scene.tool, scene.world) == ("scythe", "planar")
-    assert [p.name for p in scene.parameters] == ["grass_position", "grass_yaw"]
+    assert [p.name for p in scene.parameters] == ["grass_position"]
     assert (scene.stalk_count, scene.patch_size, scene.stalk_width) == (10, (0.4, 0.1), 0.005)
     with pytest.raises(RuntimeError, match="call reset"):
         scene.goal_reward()
@@ -43,7 +43,7 @@ def test_registry_builds_a_scene_with_the_protocol_at_the_authors_size():
 
 @pytest.mark.parametrize(
     "poses",
-    [scripted_sweep({"grass_position": GRASS, "grass_yaw": 0.0}), pulled(1.3, 0.05), pulled(2.0, 0.15), pulled(0.8, 0.05)],
+    [scripted_sweep({"grass_position": GRASS}), pulled(1.3, 0.05), pulled(2.0, 0.15), pulled(0.8, 0.05)],
     ids=["scripted", "slow pull", "high pull", "too slow"],
 )
 def test_the_twin_cuts_what_the_3d_scene_cuts(poses):
@@ -58,7 +58,7 @@ def test_the_twin_cuts_what_the_3d_scene_cuts(poses):
 
 def test_scripted_pulls_cut_every_stalk_and_slow_or_high_ones_none():
     scene = PlanarScytheScene()
-    run(scene, scripted_sweep({"grass_position": GRASS, "grass_yaw": 0.0}))
+    run(scene, scripted_sweep({"grass_position": GRASS}))
     np.testing.assert_array_equal(scene.goal_reward(), [scene.stalk_count] * 2)
     assert scene.is_success().all()
     for poses in (pulled(0.8, 0.05), pulled(2.0, 0.15)):
@@ -72,7 +72,7 @@ def test_dense_reward_grows_as_the_head_point_approaches_the_patch_centre_in_the
     centre (their one grass patch); the height is ignored (the plane's normal), the reward 0 before
     the first step."""
     scene = PlanarScytheScene()
-    scene.reset({"grass_position": GRASS, "grass_yaw": 0.0}, np.random.default_rng(0), batch_size=2)
+    scene.reset({"grass_position": GRASS}, np.random.default_rng(0), batch_size=2)
     np.testing.assert_array_equal(scene.dense_reward(), [0.0, 0.0])  # no scythe yet
     rewards = []
     for offset in ([-1.5, 0.5, 0.3], [-0.5, 0.2, 0.6], [0.0, 0.0, 0.05]):
@@ -87,8 +87,8 @@ def test_dense_reward_grows_as_the_head_point_approaches_the_patch_centre_in_the
 
 def test_same_seed_same_stalks_and_instances_differ():
     first, second = PlanarScytheScene(), PlanarScytheScene()
-    first.reset({"grass_position": GRASS, "grass_yaw": 0.0}, np.random.default_rng(3), 2)
-    second.reset({"grass_position": GRASS, "grass_yaw": 0.0}, np.random.default_rng(3), 2)
+    first.reset({"grass_position": GRASS}, np.random.default_rng(3), 2)
+    second.reset({"grass_position": GRASS}, np.random.default_rng(3), 2)
     np.testing.assert_array_equal(first.stalks, second.stalks)
     assert not np.allclose(first.stalks[0], first.stalks[1])
     assert np.all(np.abs(first.stalks - GRASS[:2]) <= np.array(first.patch_size) / 2)
@@ -102,7 +102,7 @@ def test_success_needs_the_cut_within_the_window():
 
 def test_invalid_parameters_are_rejected_with_a_reason():
     scene = PlanarScytheScene()
-    far = {"grass_position": np.array([0.0, -7.0, 0.0]), "grass_yaw": 0.0}
+    far = {"grass_position": np.array([0.0, -7.0, 0.0])}
     assert "outside the world" in scene.invalid_reason(far)
     assert "missing parameter" in scene.invalid_reason({})
     with pytest.raises(InvalidSceneParameters, match="outside the world"):
@@ -111,8 +111,8 @@ def test_invalid_parameters_are_rejected_with_a_reason():
 
 def test_footprints_and_snapshot():
     scene = PlanarScytheScene()
-    scene.reset({"grass_position": GRASS, "grass_yaw": 0.0}, np.random.default_rng(0))
-    np.testing.assert_allclose(scene.footprints({"grass_position": GRASS, "grass_yaw": 0.0}), [[1.0, 0.5, 0.2, 0.05, 0.0]])
+    scene.reset({"grass_position": GRASS}, np.random.default_rng(0))
+    np.testing.assert_allclose(scene.footprints({"grass_position": GRASS}), [[1.0, 0.5, 0.2, 0.05, 0.0]])
     snapshot = scene.snapshot()
     assert snapshot["stalks"].shape == (scene.stalk_count, 3) and not snapshot["cut"].any()
     scene.step(ToolPose(np.array([0.0, 0.0, 0.05]), LEVEL))
@@ -124,7 +124,7 @@ def test_per_instance_patches_put_each_instance_s_stalks_in_its_own_patch():
     instance 0's patch cuts only instance 0's, and the dense term measures each from its own patch."""
     scene = PlanarScytheScene()
     patches = np.stack([GRASS, GRASS + np.array([1.0, 0.0, 0.0])])
-    scene.reset({"grass_position": patches, "grass_yaw": 0.0}, np.random.default_rng(0), batch_size=2)
+    scene.reset({"grass_position": patches}, np.random.default_rng(0), batch_size=2)
     half = np.array(scene.patch_size) / 2
     assert np.all(np.abs(scene.stalks - patches[:, None, :2]) <= half)
     for position, rotation in zip(*pulled(1.3, 0.05)):

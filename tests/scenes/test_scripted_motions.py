@@ -20,7 +20,7 @@ CASES = [  # tool, world, scene parameters, the goal reward every instance must 
     ),
     ("hammer", "3d", {"nail_position": np.array([0.29, -0.48, 0.15])}, 1),
     ("hammer", "3d", {"nail_position": np.array([0.0, 0.0, 0.6])}, 1),  # above the origin: handle along -x
-    ("scythe", "3d", {"grass_position": np.array([0.27, 0.41, 0.0]), "grass_yaw": 0.0}, 10),
+    ("scythe", "3d", {"grass_position": np.array([0.27, 0.41, 0.0])}, 10),
 ]
 
 

@@ -26,7 +26,7 @@ PATCH = np.array([1.0, -0.5, 0.0])
 
 def fresh(batch_size=4, seed=0, **kwargs):
     scene = SpatialScytheScene(**kwargs)
-    scene.reset({"grass_position": PATCH, "grass_yaw": 0.0}, np.random.default_rng(seed), batch_size=batch_size)
+    scene.reset({"grass_position": PATCH}, np.random.default_rng(seed), batch_size=batch_size)
     return scene
 
 
@@ -48,7 +48,7 @@ def pull_across(scene, speed, height=0.05, x=PATCH[0], rotation=LEVEL, towards_h
 def test_registry_protocol_and_the_authors_size():
     scene = make_scene("scythe", "3d")
     assert isinstance(scene, Scene)
-    assert [p.name for p in scene.parameters] == ["grass_position", "grass_yaw"]  # the yaw: a departure
+    assert [p.name for p in scene.parameters] == ["grass_position"]  # no yaw: the authors' has none
     assert (scene.n_stalks, scene.patch_size, scene.stalk_height, scene.stalk_width) == (10, (0.4, 0.1), 0.3, 0.005)
     spec = tool_spec("scythe")
     assert (spec.head_width, spec.length) == (0.35, 0.68)  # blade 0.35 m; snath 0.70 m less half the blade
@@ -57,31 +57,16 @@ def test_registry_protocol_and_the_authors_size():
 
 def test_scripted_pulls_cut_every_stalk_within_the_first_second():
     scene = fresh(batch_size=20)
-    run(scene, scripted_sweep({"grass_position": PATCH, "grass_yaw": 0.0}))
+    run(scene, scripted_sweep({"grass_position": PATCH}))
     np.testing.assert_array_equal(scene.goal_reward(), scene.n_stalks)
     assert scene.is_success().all()
     assert np.all(scene.cut_time < 1.0)
 
 
-@pytest.mark.parametrize("yaw", [-1.2, 0.5, np.pi / 2])
-def test_a_turned_patch_turns_its_stalks_footprint_and_the_scripted_draw(yaw):
-    params = {"grass_position": PATCH, "grass_yaw": yaw}
-    scene = SpatialScytheScene()
-    scene.reset(params, np.random.default_rng(0), batch_size=20)
-    along = np.array([np.cos(yaw), np.sin(yaw)])
-    offsets = scene.stalks_xy - PATCH[:2]  # (B, N, 2)
-    assert np.abs(offsets @ along).max() <= 0.2 and np.abs(offsets @ [-along[1], along[0]]).max() <= 0.05
-    assert np.abs(offsets @ along).max() > 0.15  # they fill the length, not the width
-    np.testing.assert_allclose(scene.footprints(params), [[1.0, -0.5, 0.2, 0.05, yaw]])
-    run(scene, scripted_sweep(params))
-    np.testing.assert_array_equal(scene.goal_reward(), scene.n_stalks)
-    assert scene.is_success().all() and float(scene.snapshot()["patch_yaw"]) == yaw
-
-
 def test_the_scripted_draw_holds_the_handle_up_and_crosses_the_patch_at_full_speed():
     """The handle end stands above the blade (where a robot grips), the edge moves towards the
     handle along the patch's length, from rest to rest, at DRAW_SPEED wherever it is over the patch."""
-    poses = scripted_sweep({"grass_position": PATCH, "grass_yaw": 0.0})
+    poses = scripted_sweep({"grass_position": PATCH})
     handle = poses.position + tool_spec("scythe").length * poses.rotation[:, :, 2]
     assert np.all(handle[:, 2] - poses.position[:, 2] > 0.2)
     edge = poses.position + edge_centre_offset(poses.rotation[0])  # (T, 3), one rotation throughout
@@ -192,17 +177,17 @@ def test_dense_reward_grows_as_the_head_point_approaches_the_patch_centre():
 
 def test_invalid_parameters_are_rejected_with_a_reason():
     scene = SpatialScytheScene()
-    good = {"grass_position": PATCH, "grass_yaw": 0.0}
+    good = {"grass_position": PATCH}
     assert scene.invalid_reason(good) is None
-    assert "ground" in scene.invalid_reason({"grass_position": PATCH + [0, 0, 0.1], "grass_yaw": 0.0})
+    assert "ground" in scene.invalid_reason({"grass_position": PATCH + [0, 0, 0.1]})
     assert "missing" in scene.invalid_reason({})
     with pytest.raises(InvalidSceneParameters):
-        scene.reset({"grass_position": np.array([9.0, 0.0, 0.0]), "grass_yaw": 0.0}, np.random.default_rng(0))
+        scene.reset({"grass_position": np.array([9.0, 0.0, 0.0])}, np.random.default_rng(0))
 
 
 def test_footprint_and_snapshot():
     scene = fresh()
-    np.testing.assert_allclose(scene.footprints({"grass_position": PATCH, "grass_yaw": 0.0}), [[1.0, -0.5, 0.2, 0.05, 0.0]])
+    np.testing.assert_allclose(scene.footprints({"grass_position": PATCH}), [[1.0, -0.5, 0.2, 0.05, 0.0]])
     pull_across(scene, 3.0)
     snap = scene.snapshot()
     assert snap["stalk_base"].shape == (scene.n_stalks, 3)
@@ -214,7 +199,7 @@ def test_mowing_after_the_window_is_not_a_success():
     scene = fresh(batch_size=1)
     for _ in range(30):  # wait 1.25 s beside the patch before pulling
         scene.step(ToolPose(PATCH + [-0.2, 0.4, 0.05], LEVEL))
-    run(scene, scripted_sweep({"grass_position": PATCH, "grass_yaw": 0.0}))
+    run(scene, scripted_sweep({"grass_position": PATCH}))
     assert scene.goal_reward()[0] == scene.n_stalks
     assert not scene.is_success()[0]
 

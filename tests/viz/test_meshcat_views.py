@@ -71,7 +71,7 @@ def test_scythe_replay_shows_cut_stalks_fallen(tmp_path, html_commands):
     index = np.minimum(np.arange(N_FRAMES), len(pulled.position) - 1)
     frames_poses = ToolPose(pulled.position[index], pulled.rotation[index])
     scene = SpatialScytheScene(n_stalks=20, patch_size=(0.3, 0.1))
-    params = {"grass_position": np.array([1.0, 0.0, 0.0]), "grass_yaw": 0.0}
+    params = {"grass_position": np.array([1.0, 0.0, 0.0])}
     frames = replay_scene(scene, frames_poses, params, np.random.default_rng(1), tool_alone=False)
     assert frames[-1]["stalk_cut"].all() and not frames[0]["stalk_cut"].any()
     path = replay_to_html(tmp_path / "scythe.html", frames, "scythe")

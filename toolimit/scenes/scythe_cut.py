@@ -1,5 +1,5 @@
 """When a scythe cuts a stalk: the authors' rule (pyphysx_envs ``ScytheTaskScene.cut_grasses``),
-and the grass patch it cuts, shared by the 3D scythe scene and its planar twin.
+shared by the 3D scythe scene and its planar twin.
 
 World frame: metres, z up, ground at z = 0; stalks are vertical segments standing on the ground.
 The **cutting edge** is the segment ``edge`` (2, 3) in the tool frame (the blade's side towards the
@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from toolimit.scenes.base import ParameterSpec
 from toolimit.tools import tool_spec
 from toolimit.tools.scythe import SCYTHE_SNATH_RADIUS
 
@@ -47,32 +46,6 @@ CUTTING_THRESHOLD = 0.02
 #: The authors' grass patch (``grass_patch_len``, ``grass_patch_width``): length along world x and
 #: width along y, m; both scythe scenes' default and the scripted draw's (:mod:`toolimit.scenes.spatial.sweep`).
 PATCH_SIZE = (0.4, 0.1)
-#: The patch's turn about z (rad; its length's heading from world x), a scene parameter alignment
-#: samples uniformly. The authors' patch has none (it lies along world x): their videos' world frame
-#: is not ours. A synthetic demonstration is turned by a random yaw, as a camera's heading is unknown,
-#: so with the patch along x its draw crossed the patch at any angle (13 to 162 degrees off its
-#: length on ``scythe_00``..``_04``), and the draws that crossed it most obliquely learnt least
-#: (docs/original_setup.md#the-timed-tools-and-the-talos-as-the-authors-built-them). The patch
-#: is symmetric under a half turn, hence the half-open range.
-GRASS_YAW = ParameterSpec(
-    "grass_yaw",
-    "uniform",
-    low=-np.pi / 2,
-    high=np.pi / 2,
-    unit="rad",
-    description="heading of the grass patch's length from world x",
-)
-
-
-def scatter_stalks(
-    centre: np.ndarray, yaw: float, patch_size: tuple[float, float], count: int, rng: np.random.Generator
-) -> np.ndarray:
-    """(B, count, 2) stalk feet, world x-y (m), uniform in each of B patches of ``patch_size``
-    (length, width, m) centred at ``centre`` (B, 2) m and turned by ``yaw`` rad about z."""
-    half = np.array(patch_size) / 2
-    local = rng.uniform(-half, half, size=(len(centre), count, 2))
-    c, s = np.cos(yaw), np.sin(yaw)
-    return centre[:, None, :] + local @ np.array([[c, s], [-s, c]])
 
 
 @dataclass(frozen=True)

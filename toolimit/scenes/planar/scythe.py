@@ -2,8 +2,8 @@
 
 World (pymunk x, y = world x, y; heights z are kept): ``stalk_count`` (10) grass stalks, points
 standing on the ground, placed uniformly at random (each instance with its own generator draws) in
-the authors' ``patch_size`` rectangle (0.4 m long, 0.1 m wide) centred at parameter
-``grass_position`` and turned by ``grass_yaw``, as in the 3D scene.
+the authors' ``patch_size`` rectangle (0.4 m along world x, 0.1 m along y) centred at parameter
+``grass_position``, as in the 3D scene.
 
 The scythe's blade is a kinematic pymunk body (see kinematic_tool) moving at constant velocity and
 angular velocity over each control step. The scythe's demonstration is not flattened for this
@@ -40,14 +40,7 @@ from toolimit.scenes.base import (
     world_position,
 )
 from toolimit.scenes.planar.kinematic_tool import KinematicTool
-from toolimit.scenes.scythe_cut import (
-    GRASS_YAW,
-    MAX_CUT_HEIGHT,
-    PATCH_SIZE,
-    ScytheCutRule,
-    scatter_stalks,
-    scythe_cut_rule,
-)
+from toolimit.scenes.scythe_cut import MAX_CUT_HEIGHT, PATCH_SIZE, ScytheCutRule, scythe_cut_rule
 from toolimit.scenes.spatial.tool_motion import interpolate_poses
 from toolimit.tools import ToolPose
 
@@ -97,11 +90,9 @@ class PlanarScytheScene(WindowedGoalScene):
                 f"centre of the {self.patch_size[0]:.2f} x {self.patch_size[1]:.2f} m grass patch on the ground (x, y used)",
                 axes=(0, 1),
             ),
-            GRASS_YAW,
         )
         # The state of the B instances, built by reset.
         self.grass_centre = np.zeros((0, 2))  # (B, 2) patch centres, world x-y, m
-        self.grass_yaw = 0.0  # rad, the patch's length from world x
         self.stalks = np.zeros((0, self.stalk_count, 2))  # (B, M, 2) stalk positions, m
         self.cut = np.zeros((0, self.stalk_count), dtype=bool)  # (B, M)
         self._spaces: list[pymunk.Space] = []
@@ -111,11 +102,13 @@ class PlanarScytheScene(WindowedGoalScene):
     # ----------------------------------------------------------------------------------- reset/step
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Build ``batch_size`` instances at ``params["grass_position"]`` ((3,) or (B, 3), per
-        instance) turned by ``params["grass_yaw"]``, each with its own stalk placement drawn from ``rng``."""
+        instance), each with its own stalk placement drawn from ``rng``."""
         batch_size = check_reset(self, params, batch_size)
         self.grass_centre = instance_positions(params, "grass_position", batch_size)[:, :2]
-        self.grass_yaw = float(params["grass_yaw"])
-        self.stalks = scatter_stalks(self.grass_centre, self.grass_yaw, self.patch_size, self.stalk_count, rng)
+        half = np.array(self.patch_size) / 2.0
+        self.stalks = self.grass_centre[:, None] + rng.uniform(
+            -half, half, size=(batch_size, self.stalk_count, 2)
+        )  # (B, M, 2)
         self.cut = np.zeros((batch_size, self.stalk_count), dtype=bool)
         self._spaces = [pymunk.Space() for _ in range(batch_size)]
         self._tool = KinematicTool(self._spaces, "xy", reference_axis=0)
@@ -151,9 +144,9 @@ class PlanarScytheScene(WindowedGoalScene):
 
     # ----------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:
-        """(1, 5) the grass patch (x, y, half-length, half-width, yaw), m/rad."""
+        """(1, 5) the grass patch (x, y, half-length, half-width, yaw 0), m/rad."""
         x, y = np.asarray(params["grass_position"], dtype=float)[:2]
-        return np.array([[x, y, self.patch_size[0] / 2.0, self.patch_size[1] / 2.0, float(params["grass_yaw"])]])
+        return np.array([[x, y, self.patch_size[0] / 2.0, self.patch_size[1] / 2.0, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0: ``stalks`` (M, 3) world foot points, ``cut`` (M,) bool, ``blade`` (2, 3) world

@@ -1,10 +1,9 @@
 """The 3D scythe world: mow a patch of grass stalks with a kinematic scythe, at the authors' size
 (pyphysx_envs ``scenes/ScytheTaskScene.py``).
 
-World frame: metres, z up, ground at z = 0. The patch is a rectangle ``patch_size`` (0.4 m long,
-0.1 m wide) centred at the parameter ``grass_position``, its length turned ``grass_yaw`` rad from
-world x (:data:`~toolimit.scenes.scythe_cut.GRASS_YAW`: the authors' patch has no yaw, a
-departure). Each instance scatters ``n_stalks`` (10) thin
+World frame: metres, z up, ground at z = 0. The patch is a rectangle ``patch_size`` (0.4 m along
+world x, 0.1 m along y) centred at the parameter ``grass_position``; the authors' scene has no yaw
+parameter (its yaw stays 0), nor has this one. Each instance scatters ``n_stalks`` (10) thin
 vertical stalks (square section ``stalk_width`` 5 mm, height ``stalk_height`` 0.3 m) uniformly in
 it with its own random generator.
 
@@ -36,14 +35,7 @@ from toolimit.scenes.base import (
     require_reset,
     world_position,
 )
-from toolimit.scenes.scythe_cut import (
-    GRASS_YAW,
-    MAX_CUT_HEIGHT,
-    PATCH_SIZE,
-    ScytheCutRule,
-    scatter_stalks,
-    scythe_cut_rule,
-)
+from toolimit.scenes.scythe_cut import MAX_CUT_HEIGHT, PATCH_SIZE, ScytheCutRule, scythe_cut_rule
 from toolimit.scenes.spatial.tool_motion import SweptTool, tool_snapshot
 from toolimit.tools import ToolPose
 
@@ -100,11 +92,9 @@ class SpatialScytheScene(WindowedGoalScene):
                 "centre of the grass patch on the ground",
                 bound_reason="the patch lies on the ground, z = 0",
             ),
-            GRASS_YAW,
         )
         # The state of the B instances, built by reset.
         self.grass_position = np.zeros((0, 3))  # (B, 3) patch centres, world, m
-        self.grass_yaw = 0.0  # rad, the patch's length from world x
         self.stalks_xy = np.zeros((0, self.n_stalks, 2))  # (B, N, 2) stalk positions on the ground, world x-y, m
         self.cut = np.zeros((0, self.n_stalks), dtype=bool)  # (B, N)
         self.cut_time = np.zeros((0, self.n_stalks))  # (B, N) s since the tool was placed
@@ -113,13 +103,13 @@ class SpatialScytheScene(WindowedGoalScene):
     # ----------------------------------------------------------------------------- parameters
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """Scatter B patches of stalks (each from ``rng``) at ``params["grass_position"]`` ((3,) or
-        (B, 3), per instance) turned by ``params["grass_yaw"]``; the scythe is absent until ``step``."""
+        (B, 3), per instance); the scythe is absent until ``step``."""
         b = check_reset(self, params, batch_size)
         self.start_instances(b)  # the clock starts at the tool's placement
         self.grass_position = instance_positions(params, "grass_position", b)
-        self.grass_yaw = float(params["grass_yaw"])
+        half = np.array(self.patch_size) / 2
         #: (B, N, 2) stalk positions on the ground, world x-y, m.
-        self.stalks_xy = scatter_stalks(self.grass_position[:, :2], self.grass_yaw, self.patch_size, self.n_stalks, rng)
+        self.stalks_xy = self.grass_position[:, None, :2] + rng.uniform(-half, half, size=(b, self.n_stalks, 2))
         self.cut = np.zeros((b, self.n_stalks), dtype=bool)
         self.cut_time = np.full((b, self.n_stalks), np.inf)
         self._tool = SweptTool(b)
@@ -155,16 +145,16 @@ class SpatialScytheScene(WindowedGoalScene):
 
     # ---------------------------------------------------------------------------------- views
     def footprints(self, params: SceneParams) -> np.ndarray:
-        """(1, 5) the patch: centre x, y, half-length, half-width (m), yaw (rad)."""
+        """(1, 5) the patch: centre x, y, half-length, half-width (m), yaw 0 (rad)."""
         x, y = np.asarray(params["grass_position"], dtype=float)[:2]
-        return np.array([[x, y, self.patch_size[0] / 2, self.patch_size[1] / 2, float(params["grass_yaw"])]])
+        return np.array([[x, y, self.patch_size[0] / 2, self.patch_size[1] / 2, 0.0]])
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """Instance 0 for views.
 
         Keys: ``stalk_base`` (N, 3) stalk bottoms (z = 0), ``stalk_half_extents`` (3,),
         ``stalk_cut`` (N,) bool, ``patch_center`` (3,), ``patch_half_extents`` (2,) m,
-        ``patch_yaw`` () rad, ``blade`` (2, 3) edge root and tip in the world (NaN before the
+        ``patch_yaw`` () rad (0), ``blade`` (2, 3) edge root and tip in the world (NaN before the
         first step), ``tool_position`` (3,), ``tool_rotation`` (3, 3), ``time`` () s.
         """
         tool = tool_snapshot(self._tool.position, self._tool.rotation)
@@ -176,7 +166,7 @@ class SpatialScytheScene(WindowedGoalScene):
             "stalk_cut": self.cut[0].copy(),
             "patch_center": self.grass_position[0].copy(),
             "patch_half_extents": np.array(self.patch_size) / 2,
-            "patch_yaw": np.array(self.grass_yaw),
+            "patch_yaw": np.array(0.0),
             "blade": blade,
             **tool,
             "time": np.array(self.goal_timer.time),

@@ -7,9 +7,8 @@ moving towards the handle at more than 1 m/s, with the snath within 30 degrees o
 
 The blade (0.35 m) is shorter than the patch (0.4 x 0.1 m), so a pull across the patch's width
 leaves stalks at its ends. :func:`scripted_sweep` draws along the patch's length instead: the blade
-level across the patch, the snath along its length with the handle towards its -x end (in the
-patch's frame, turned ``grass_yaw`` from the world's), raised :data:`SNATH_ELEVATION`, pulled
-towards the handle over the patch and
+level across the patch (tool x along world -y), the snath along world x with the handle towards -x,
+raised :data:`SNATH_ELEVATION`, pulled towards the handle (world -x) over the patch and
 :data:`DRAW_MARGIN` beyond each end at :data:`DRAW_SPEED`. The speed rises from rest over a run-up
 of :data:`RAMP` and falls back over as long a run-out, a half cosine each, so that a robot arm can
 follow it: it is the LfD baseline's kinesthetic demonstration (:mod:`toolimit.learn.kinesthetic`).
@@ -87,8 +86,8 @@ def scripted_sweep(
     the edge ``height`` m above the ground, the run-out, then held still 0.25 s. Returns (T, 3)
     head positions and (T, 3, 3) rotations (world frame) at ``fps``."""
     patch = np.asarray(params["grass_position"], dtype=float)
-    rotation = rotation_z(float(params["grass_yaw"]) - np.pi / 2) @ raised(SNATH_ELEVATION)
-    towards_handle = rotation[:, 2] * [1.0, 1.0, 0.0]  # the snath's horizontal direction: down the patch's length
+    rotation = rotation_z(-np.pi / 2) @ raised(SNATH_ELEVATION)
+    towards_handle = rotation[:, 2] * [1.0, 1.0, 0.0]  # the snath's horizontal direction, world: -x
     towards_handle /= np.linalg.norm(towards_handle)
     cruise = PATCH_SIZE[0] + 2.0 * DRAW_MARGIN
     distances = ramped_distances(speed, RAMP, cruise, 1.0 / fps)
