@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from toolimit.align.config import AlignmentConfig
-from toolimit.align.episode_cut import KEPT_FRAMES, STILL_FRAMES, EpisodeCut, first_reward_cut, is_timed
+from toolimit.align.episode_cut import AFTER_REWARD_FRAMES, KEPT_FRAMES, EpisodeCut, first_reward_cut, is_timed
 from toolimit.align.outputs import write_alignment
 from toolimit.align.search import align
 from toolimit.demos import load_demo
@@ -19,10 +19,12 @@ from toolimit.tools import tool_spec
 from toolimit.trajopt.selection import load_candidates
 
 
-def test_the_cut_keeps_the_last_20_poses_of_the_motion_to_the_first_reward_and_5_still_ones():
+def test_the_cut_keeps_the_last_20_poses_of_the_motion_to_5_frames_after_the_first_reward():
     late = EpisodeCut(first_reward_frame=30)
-    assert (late.start, late.frames) == (30 + 1 + STILL_FRAMES - KEPT_FRAMES, KEPT_FRAMES) == (16, 20)
-    np.testing.assert_array_equal(late.apply(np.arange(40)), [*range(16, 31), 30, 30, 30, 30, 30])
+    assert (late.start, late.frames) == (30 + 1 + AFTER_REWARD_FRAMES - KEPT_FRAMES, KEPT_FRAMES) == (16, 20)
+    np.testing.assert_array_equal(late.apply(np.arange(40)), range(16, 36))  # the motion carries on
+    # a motion that ends within the 5 frames after the reward: its last pose is held
+    np.testing.assert_array_equal(late.apply(np.arange(33)), [*range(16, 33), 32, 32, 32])
     early = EpisodeCut(first_reward_frame=5)  # a shorter motion keeps all of it
     assert (early.start, early.frames) == (0, 11)
     assert early.apply(np.zeros((40, 3, 3))).shape == (11, 3, 3)
@@ -30,7 +32,7 @@ def test_the_cut_keeps_the_last_20_poses_of_the_motion_to_the_first_reward_and_5
         "first_reward_frame": 30,
         "episode_start_frame": 16,
         "episode_frames": 20,
-        "still_frames": 5,
+        "frames_after_reward": 5,
     }
 
 
@@ -74,9 +76,8 @@ def test_alignment_cuts_a_hammer_candidate_at_its_first_planted_nail(hammer_alig
         )
         episode = result.episode_poses(candidate)
         assert len(episode.position) == KEPT_FRAMES
-        np.testing.assert_array_equal(episode.position[:15], full.position[cut.start : cut.first_reward_frame + 1])
         np.testing.assert_array_equal(
-            episode.position[-STILL_FRAMES:], np.repeat(full.position[cut.first_reward_frame][None], 5, 0)
+            episode.position, full.position[cut.start : cut.first_reward_frame + 1 + AFTER_REWARD_FRAMES]
         )
         # the full motion earns nothing before the cut's last moving step, and the episode earns the goal in time
         scene = make_scene("hammer", "3d")

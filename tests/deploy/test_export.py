@@ -68,8 +68,10 @@ def test_a_slow_smooth_trajectory_keeps_its_timing(write_trajectory, tmp_path):
     assert peaks["velocity"] < 0.5
     # within the limits at its own timing: its samples are the control points (one piece per step)
     # and nothing is slowed down: the duration is the optimised 4 s plus the two end spans (2 dt)
+    # and one braking step (its last step's tiny speed is within one step's change)
     assert summary["subdivisions"] == 1 and summary["optimised_duration_s"] == pytest.approx(4.0)
-    assert summary["duration_s"] == pytest.approx(4.0 + 2 * DT)
+    assert summary["braking_s"] == pytest.approx(DT)
+    assert summary["duration_s"] == pytest.approx(4.0 + 3 * DT)
     assert summary["margins"] == Margins().as_dict()
     assert len(times) == math.ceil(summary["duration_s"] * 1000 - 1e-9) + 1 and summary["rate_hz"] == 1000.0
     np.testing.assert_allclose(positions[0], q[0], atol=1e-12)
@@ -157,6 +159,24 @@ def test_only_the_fast_part_is_slowed_down():
     assert path.duration < 0.5 * uniform
     gentle_alone = retime(gentle, DT, PANDA, subdivisions=4).derivative(np.array([2.0]), 0)[0]
     np.testing.assert_allclose(samples.position[2000], gentle_alone, atol=1e-6)  # same timing at t = 2 s
+
+
+def test_a_path_ending_at_speed_brakes_after_its_end_and_keeps_its_timing():
+    # joint 1 from rest up to 2 rad/s within its acceleration limit, ending at that speed (a learnt
+    # draw ends where its episode ends): braked after the end, not slowed before it
+    acceleration, top = 0.9 * PANDA.acceleration[0], 2.0
+    speeds = np.minimum(acceleration * DT * np.arange(1, 25), top)
+    q = np.tile(PANDA_MIDDLE, (25, 1))
+    q[1:, 0] += np.cumsum(speeds) * DT
+    path = retime(q, DT, PANDA)
+    assert path.subdivisions == 1
+    assert path.braking_steps == math.ceil(top / (PANDA.acceleration[0] * DT))
+    assert path.duration == pytest.approx((len(q) - 1 + 2 + path.braking_steps) * DT)
+    samples = path.sample(1000.0)
+    _assert_within_limits_by_finite_differences(samples.times, samples.position, PANDA)
+    at_end = np.searchsorted(samples.times, len(q) * DT)  # sample k's weight peaks at (k + 1) dt
+    assert samples.position[at_end, 0] == pytest.approx(q[-1, 0], abs=0.01)  # the motion's own timing
+    assert np.abs(np.gradient(samples.position[:at_end, 0], samples.times[:at_end])).max() > 0.95 * top
 
 
 def test_too_fast_everywhere_is_retimed_and_respects_every_limit(write_trajectory, tmp_path):

@@ -1,13 +1,21 @@
-"""The authors' episode cut for the tools whose goal is timed (hammer, scythe).
+"""The authors' episode cut for the tools whose goal is timed (hammer, scythe), with the motion
+carried on after the goal instead of stopped.
 
 Their success is timed from the episode's start (the paper's "within the first second"), so the
 episode must start shortly before the goal: the authors (learning-from-video
 ``II_trajectory_optimization/I_repeate_tool_traj.py`` and ``main.py``) replay the aligned tool
 motion only up to the first control step that earns a goal reward (the first nail planted, the first
-stalk cut), append ``STILL_FRAMES`` (5) steps at which the tool stays still, and keep the last
-``KEPT_FRAMES`` (20) poses (fewer when the motion is shorter) as the trajectory optimisation's
-target; the policy's horizon is that trajectory's length (``train_ppo.py``), 20 steps = 0.83 s at
-24 Hz, inside the success window.
+stalk cut), append ``AFTER_REWARD_FRAMES`` (5) steps, and keep the last ``KEPT_FRAMES`` (20) poses
+(fewer when the motion is shorter) as the trajectory optimisation's target; the policy's horizon is
+that trajectory's length (``train_ppo.py``), 20 steps = 0.83 s at 24 Hz, inside the success window.
+
+One departure (docs/original_setup.md#the-episode-cut): the authors' 5 appended steps hold the tool
+still at its first rewarded pose (``add_zero_end_steps``); here they are the motion's own next 5
+frames (the last pose held only past the motion's end). Held still, the target stops a scythe's
+draw from 1.3-1.7 m/s within one 42 ms step, some 36 m/s^2, which no arm within its acceleration
+limits follows: the Panda's trajectory then tracks its candidates' draws too slowly to cut (0.1-0.4
+stalks in the learning task on ``scythe_00``, 1.1-1.4 with the motion carried on). A person does not stop the blade at the first
+stalk either.
 
 The alignment finds the cut for each candidate (:mod:`toolimit.align.search`) and every later
 stage reads the cut motion from the alignment's files, which record it (``first_reward_frame``,
@@ -24,8 +32,8 @@ import numpy as np
 
 from toolimit.scenes.base import Scene, WindowedGoalScene
 
-#: Still steps after the first rewarded step (the authors' ``add_zero_end_steps``).
-STILL_FRAMES = 5
+#: Steps kept after the first rewarded step (as many as the authors' ``add_zero_end_steps``).
+AFTER_REWARD_FRAMES = 5
 #: Poses kept from the end of the cut motion (the authors' ``take_last_n_points``).
 KEPT_FRAMES = 20
 
@@ -49,18 +57,18 @@ class EpisodeCut:
     @property
     def start(self) -> int:
         """The first kept frame of the aligned motion."""
-        return max(0, self.first_reward_frame + 1 + STILL_FRAMES - KEPT_FRAMES)
+        return max(0, self.first_reward_frame + 1 + AFTER_REWARD_FRAMES - KEPT_FRAMES)
 
     @property
     def frames(self) -> int:
         """Frames of the cut motion (at most ``KEPT_FRAMES``)."""
-        return self.first_reward_frame + 1 + STILL_FRAMES - self.start
+        return self.first_reward_frame + 1 + AFTER_REWARD_FRAMES - self.start
 
     def apply(self, frames: np.ndarray) -> np.ndarray:
-        """The cut of per-frame values ``frames`` (T, ...): frames ``start`` to
-        ``first_reward_frame``, then the last of them held for ``STILL_FRAMES`` frames."""
-        kept = frames[self.start : self.first_reward_frame + 1]
-        return np.concatenate([kept, np.repeat(kept[-1:], STILL_FRAMES, axis=0)])
+        """The cut of per-frame values ``frames`` (T, ...): frames ``start`` to ``first_reward_frame``
+        and the ``AFTER_REWARD_FRAMES`` after it, the last frame held where the motion ends sooner."""
+        kept = frames[self.start : self.first_reward_frame + 1 + AFTER_REWARD_FRAMES]
+        return np.concatenate([kept, np.repeat(kept[-1:], self.frames - len(kept), axis=0)])
 
     def record(self) -> dict[str, Any]:
         """JSON values for the alignment's record."""
@@ -68,7 +76,7 @@ class EpisodeCut:
             "first_reward_frame": self.first_reward_frame,
             "episode_start_frame": self.start,
             "episode_frames": self.frames,
-            "still_frames": STILL_FRAMES,
+            "frames_after_reward": AFTER_REWARD_FRAMES,
         }
 
 

@@ -19,7 +19,8 @@ Output (each file written atomically, both complete before either is renamed int
 
 * ``joint_trajectory.csv``: the commands to stream to the robot, every 1/rate s from rest to rest;
   header ``time_s`` then the joint names, positions in rad;
-* ``joint_trajectory.json``: joint names, rate, units, exported and optimised durations, the largest
+* ``joint_trajectory.json``: joint names, rate, units, exported and optimised durations (and the
+  braking that brings a path ending in motion to rest), the largest
   gap between the exported path and the optimised samples, the limits and margins used, every
   quantity's worst sample, the retiming method, the base placement, and the open-loop replay's
   outcome when it ran.
@@ -168,6 +169,7 @@ def export_trajectory(
         "rate_hz": rate,
         "duration_s": plan.path.duration,
         "optimised_duration_s": plan.optimised_duration,
+        "braking_s": plan.path.braking_steps * plan.trajectory.dt,
         "n_samples": len(plan.samples.times),
         "path_deviation_rad": plan.path.path_deviation,
         "subdivisions": plan.path.subdivisions,

@@ -2,7 +2,11 @@
 
 The path and its timing are one curve: a clamped cubic B-spline in time (``scipy.interpolate.BSpline``)
 whose control points are the path's samples q_0..q_T, the first and the last repeated three times so
-that the robot starts and stops at rest with zero acceleration. Two properties of B-splines make
+that the robot starts and stops at rest with zero acceleration. A path whose last step still moves
+(a learnt motion ends where its episode ends, not at rest) is first continued by braking at the
+acceleration limit (:meth:`MotionBound.braking <toolimit.robots.motion_bound.MotionBound.braking>`):
+a real arm cannot stop within a step, and stopping it on the path's last samples would slow the
+motion's end down (a scythe's draw, measured: 1.17 s exported for a 0.83 s rollout). Two properties of B-splines make
 the limits hold everywhere, not only at the samples:
 
 * **position**: on each span the curve is a convex combination of four consecutive control points,
@@ -93,6 +97,7 @@ class RetimedPath:
         lowest, highest: (N,) rad, each joint's smallest and largest sample: the curve stays within
             them (positions are clipped to them, which only removes rounding, of order 1e-16 rad).
         subdivisions: pieces per step between samples the curve was built with.
+        braking_steps: samples added after the path's last one to brake it to rest (one per step).
     """
 
     spline: BSpline
@@ -101,6 +106,7 @@ class RetimedPath:
     lowest: np.ndarray
     highest: np.ndarray
     subdivisions: int
+    braking_steps: int = 0
 
     def derivative(self, times: np.ndarray, order: int) -> np.ndarray:
         """(K, N) d^order q / dt^order at ``times`` (K,) s; the final position is held after the end."""
@@ -162,6 +168,8 @@ def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int | No
     if not np.all(np.isfinite(q)):
         raise ValueError("q contains non-finite values")
     check_path_positions(q, dt, limits)
+    braking = MotionBound.of_limits(limits).braking(q, dt)
+    q = np.concatenate([q, braking])
     if subdivisions is None:
         subdivisions = subdivisions_for(q, dt, limits)
     if not (isinstance(subdivisions, (int, np.integer)) and subdivisions >= 1):
@@ -193,6 +201,7 @@ def retime(q: np.ndarray, dt: float, limits: JointLimits, subdivisions: int | No
         lowest=q.min(axis=0),
         highest=q.max(axis=0),
         subdivisions=int(subdivisions),
+        braking_steps=len(braking),
     )
 
 

@@ -95,6 +95,21 @@ class MotionBound:
         return moved, (moved - q) / dt
 
 
+    def braking(self, q: np.ndarray, dt: float) -> np.ndarray:
+        """(K, N) joint samples, one every ``dt`` s, that continue the path q (T+1, N) rad from its last
+        step's velocity to rest, slowing by the acceleration bound each step (none when the path ends
+        at rest, or with no acceleration bound: such a robot stops within a step)."""
+        q = np.asarray(q, dtype=float)
+        if self.acceleration is None or len(q) < 2:
+            return q[:0]
+        position, velocity = q[-1:], (q[-1:] - q[-2:-1]) / dt
+        tail = []
+        while np.any(velocity != 0.0):
+            position, velocity = self.step(position, velocity, np.zeros_like(velocity), dt)
+            tail.append(position[0])
+        return np.array(tail).reshape(-1, q.shape[1])
+
+
 def motion_from_rest(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """The velocities (rad/s) and accelerations (rad/s^2), both (..., T, N), of joint paths q
     (..., T+1, N) rad sampled every ``dt`` s, by finite differences with the arm at rest before the
