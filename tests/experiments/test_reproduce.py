@@ -304,13 +304,16 @@ def test_every_learner_of_an_experiment_has_its_tools_budget():
     assert preset("quick").settings(preset("quick").experiments[0], seed=0).learning.timesteps < 10_000
 
 
-def test_the_full_figure_learns_with_the_authors_span_of_the_action():
-    """The paper's experiments as the authors' environment ran them: actions spanning 3 rad/s on
-    every joint, for every learner of every experiment; the planar presets keep the arm's limits."""
+def test_the_full_figure_learns_within_the_robots_limits_and_its_variant_with_the_authors_span():
+    """Every learner of the paper's figure within the robot's own limits (as the paper says its
+    policies are); the variant as the authors' environment ran them: actions spanning 3 rad/s on
+    every joint, the same experiments; the planar presets keep the arm's limits."""
     from toolimit.experiments.reproduce import preset
 
-    full = preset("full")
-    assert {full.settings(e, seed=0).learning.action_limit for e in full.experiments} == {3.0}
+    full, span = preset("full"), preset("full-authors-span")
+    assert {full.settings(e, seed=0).learning.action_limit for e in full.experiments} == {None}
+    assert {span.settings(e, seed=0).learning.action_limit for e in span.experiments} == {3.0}
+    assert span.experiments == full.experiments
     for name in ("quick", "planar"):
         chosen = preset(name)
         assert chosen.settings(chosen.experiments[0], seed=0).learning.action_limit is None

@@ -27,8 +27,11 @@ an hour) and ``full`` (the Panda with the 3D spade on the five shipped demonstra
 authors' real recording, every method; with the hammer and the scythe on their five shipped
 demonstrations, every method on ``_00`` and the method's stages on the others, and the method's
 stages on the authors' real hammer recording; the UR5 and Talos with the spade on the real
-recording, the method's stages only; the 3D world's default settings, every learner's actions
-spanning the authors' 3 rad/s on every joint, :data:`AUTHORS_ACTION_LIMIT`). A reproduction
+recording, the method's stages only; the 3D world's default settings: every learner within the
+robot's own limits, as the paper says its policies are, :class:`~toolimit.robots.motion_bound.MotionBound`)
+and ``full-authors-span`` (the same, every learner's actions spanning the authors' 3 rad/s on every
+joint with no acceleration bound, :data:`AUTHORS_ACTION_LIMIT`: the authors' environment, a
+variant). A reproduction
 continues in its output folder only with the preset and settings its results were made with (and a
 seed folder only with its seed). ``jobs`` > 1 runs experiments at a time, seeds one after another in
 the same queue, each in a child ``toolimit reproduce`` process whose output goes to
@@ -71,12 +74,12 @@ REAL_HAMMER_RECORDING = Path("../shared/data/video_demos/hammer_video1_aligned.n
 #: with the default 0.1 m every sample puts the nail's board off the ground (no candidate).
 REAL_HAMMER_Z_OFFSET_STD = 0.5
 SHIPPED_DEMOS = Path("data/demos")
-#: The span of the actions in ``full`` (rad/s on every joint, ``LearningConfig.action_limit``): the
-#: authors' environment clips the commanded velocities there (pyphysx_envs ``RobotEnv.step``),
-#: beyond the Panda's limits. With the Panda's own limits the scythe succeeds on 2 of its 5
-#: demonstrations, with this span on 4 (docs/results/scythe.md#the-authors-action-clip).
+#: The span of the actions in ``full-authors-span`` (rad/s on every joint,
+#: ``LearningConfig.action_limit``): the authors' environment clips the commanded velocities there
+#: (pyphysx_envs ``RobotEnv.step``), beyond the Panda's limits, and bounds no acceleration
+#: (docs/results/scythe.md#the-authors-action-clip).
 AUTHORS_ACTION_LIMIT = 3.0
-PRESETS = ("quick", "planar", "full")
+PRESETS = ("quick", "planar", "full", "full-authors-span")
 
 
 @dataclass(frozen=True)
@@ -109,7 +112,7 @@ def preset(name: str) -> Preset:
         return Preset(name, planar_spade, quick=True)
     if name == "planar":
         return Preset(name, planar_spade)
-    if name != "full":
+    if name not in ("full", "full-authors-span"):
         raise InputError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
     spades = [SHIPPED_DEMOS / f"spade_{k:02d}.npz" for k in range(5)] + [REAL_SPADE_RECORDING]
     experiments = [Experiment("spade", "3d", "panda", demo) for demo in spades]
@@ -133,6 +136,8 @@ def preset(name: str) -> Preset:
     experiments += [
         Experiment("spade", "3d", robot, REAL_SPADE_RECORDING, methods=PIPELINE_METHODS) for robot in ("ur5", "talos")
     ]
+    if name == "full":
+        return Preset(name, tuple(experiments))
     return Preset(name, tuple(experiments), settings_changes=(("learning.action_limit", AUTHORS_ACTION_LIMIT),))
 
 
