@@ -3,10 +3,10 @@
 The path and its timing are one curve: a clamped cubic B-spline in time (``scipy.interpolate.BSpline``)
 whose control points are the path's samples q_0..q_T, the first and the last repeated three times so
 that the robot starts and stops at rest with zero acceleration. A path whose last step still moves
-(a learnt motion ends where its episode ends, not at rest) is first continued by braking at the
-acceleration limit (:meth:`MotionBound.braking <toolimit.robots.motion_bound.MotionBound.braking>`):
+(a learnt motion ends where its episode ends, not at rest) faster than one step can stop is first
+continued by braking at the acceleration limit (:meth:`MotionBound.braking <toolimit.robots.motion_bound.MotionBound.braking>`):
 a real arm cannot stop within a step, and stopping it on the path's last samples would slow the
-motion's end down (a scythe's draw, measured: 1.17 s exported for a 0.83 s rollout). Two properties of B-splines make
+motion's end down (a scythe's 0.83 s draw, measured: its last steps stretched, 1.17 s in all). Two properties of B-splines make
 the limits hold everywhere, not only at the samples:
 
 * **position**: on each span the curve is a convex combination of four consecutive control points,
@@ -97,7 +97,8 @@ class RetimedPath:
         lowest, highest: (N,) rad, each joint's smallest and largest sample: the curve stays within
             them (positions are clipped to them, which only removes rounding, of order 1e-16 rad).
         subdivisions: pieces per step between samples the curve was built with.
-        braking_steps: samples added after the path's last one to brake it to rest (one per step).
+        braking_steps: samples added after the path's last one to brake it (one per step) to a speed
+            from which its rest at the end stops within one step.
     """
 
     spline: BSpline

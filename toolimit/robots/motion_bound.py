@@ -97,14 +97,16 @@ class MotionBound:
 
     def braking(self, q: np.ndarray, dt: float) -> np.ndarray:
         """(K, N) joint samples, one every ``dt`` s, that continue the path q (T+1, N) rad from its last
-        step's velocity to rest, slowing by the acceleration bound each step (none when the path ends
-        at rest, or with no acceleration bound: such a robot stops within a step)."""
+        step's velocity, slowing by the acceleration bound each step, until every joint can stop
+        within one more step (none for a path that ends that slowly, or with no acceleration bound:
+        such a robot stops within a step)."""
         q = np.asarray(q, dtype=float)
         if self.acceleration is None or len(q) < 2:
             return q[:0]
         position, velocity = q[-1:], (q[-1:] - q[-2:-1]) / dt
+        one_step = self.acceleration * dt * (1.0 + 1e-9)
         tail = []
-        while np.any(velocity != 0.0):
+        while np.any(np.abs(velocity) > one_step):
             position, velocity = self.step(position, velocity, np.zeros_like(velocity), dt)
             tail.append(position[0])
         return np.array(tail).reshape(-1, q.shape[1])
