@@ -9,8 +9,10 @@ commits. With every label's figures at hand it prints the ratios of each to the 
   ``spade_example_aligned`` from ``../shared/data/video_demos``, converted by
   ``toolimit.trajopt.from_original_spade_tip``) replayed tool-only 10 times in their own scene
   parameters (one batch, ``default_rng(0)``): mean final goal reward and success rate, the motion
-  as recorded (the module docstring's measurement), with the learner's reset noise (N(0, 0.01) m
-  on each position parameter in x and y, per replay) and speed-limited as the alignment replays it;
+  as recorded (the scene module docstring's measurement) and speed-limited as the alignment replays
+  it, and as recorded 50 times with the learner's reset noise (N(0, 0.01) m on each position
+  parameter in x and y, per replay; a heap without randomness of its own replays alike without
+  it), with the standard error of that mean;
 * ``slump``: 16 instances in the authors' default parameters (deposit at the origin, yaw 0, box at
   (0, 1)) with the spade far away for 150 control steps: the largest displacement of a sphere from
   its reset position after 25, 50, 100 and 150 steps (mm), the mean one after 150, the spheres
@@ -60,6 +62,7 @@ FAR_AWAY = ToolPose(np.array([3.0, 3.0, 1.0]), np.eye(3))
 SLUMP_STEPS = 150
 SLUMP_REPORTED = (25, 50, 100, 150)
 REPLAYS = 10
+NOISY_REPLAYS = 50
 #: The learner's reset noise on each position parameter, m (``toolimit.learn.simulator.PARAM_NOISE_STD``).
 PARAM_NOISE_STD = 0.01
 
@@ -92,16 +95,22 @@ def reference() -> dict[str, Any]:
     for name in AUTHORS_MOTIONS:
         motion, params = authors_motion(name)
         ways = {
-            "recorded": (params, False),
-            "recorded_reset_noise": (with_reset_noise(params, REPLAYS, np.random.default_rng(1)), False),
-            "speed_limited": (params, True),
+            "recorded": (params, REPLAYS, False),
+            "speed_limited": (params, REPLAYS, True),
+            "recorded_reset_noise": (
+                with_reset_noise(params, NOISY_REPLAYS, np.random.default_rng(1)),
+                NOISY_REPLAYS,
+                False,
+            ),
         }
         record[name] = {}
-        for way, (replay_params, alone) in ways.items():
+        for way, (replay_params, replays, alone) in ways.items():
             scene = SpatialSpadeScene()
-            goal = replay(scene, replay_params, np.random.default_rng(0), motion, REPLAYS, tool_alone=alone)
+            goal = replay(scene, replay_params, np.random.default_rng(0), motion, replays, tool_alone=alone)
             record[name][way] = {
+                "replays": replays,
                 "goal_reward": float(goal.mean()),
+                "goal_reward_standard_error": float(goal.std(ddof=1) / np.sqrt(replays)),
                 "success_rate": float(np.mean(scene.is_success())),
             }
     return record
@@ -174,9 +183,10 @@ def ratios(runs: dict[str, Any]) -> None:
         run = runs[label]
         print(f"{label} against {labels[0]}:")
         for name in AUTHORS_MOTIONS:
-            a, b = (r.get("reference", {}).get(name, {}).get("recorded") for r in (base, run))
-            if a and b:
-                print(f"  {name} goal reward {b['goal_reward']:.1f} / {a['goal_reward']:.1f}")
+            for way in ("recorded", "speed_limited", "recorded_reset_noise"):
+                a, b = (r.get("reference", {}).get(name, {}).get(way) for r in (base, run))
+                if a and b:
+                    print(f"  {name} {way}: goal reward {b['goal_reward']:.1f} / {a['goal_reward']:.1f}")
         a, b = base.get("slump"), run.get("slump")
         if a and b:
             print(
