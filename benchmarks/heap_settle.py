@@ -19,13 +19,16 @@ commits. With every label's figures at hand it prints the ratios of each to the 
   moved more than 1 cm, those outside the deposit's 0.4 m square (at reset and after 150 steps),
   the first step at which every sphere of an instance sleeps (0: not within the 150 steps), and the CPU time of the 150 steps;
 * ``stages`` (``--demos``): stages ii and iii of ``toolimit run --tool spade --robot panda`` with the
-  ``full`` reproduction's settings (seed 0) into ``--out``/<demo>, then the figure's ``tool_only``
-  and ``trajopt`` cells (20 episodes, ``toolimit.experiments.measure``) and the stages' wall times.
+  ``full`` reproduction's settings (seed 0) into ``--out``/<label>/<demo>, then the figure's
+  ``tool_only`` and ``trajopt`` cells (20 episodes, ``toolimit.experiments.measure``) and the
+  stages' wall times. ``--stages-of LABEL`` measures the cells on the stages another label made
+  (found finished in ``--out``/LABEL, not run again): the heap's effect on the same trajectory.
 
 Usage (each part is saved as soon as it is measured; ``--demos`` may be spread over calls):
 
     python benchmarks/heap_settle.py --label deposit
     python benchmarks/heap_settle.py --label deposit --skip-scene --out runs/heap --demos spade_00,spade_video1_aligned
+    python benchmarks/heap_settle.py --label deposit_on_pen_stages --stages-of pen --skip-scene --out runs/heap --demos spade_00
 """
 
 from __future__ import annotations
@@ -51,6 +54,7 @@ from toolimit.scenes.replay import replay
 from toolimit.scenes.spatial.spade import DEPOSIT_INNER, SpatialSpadeScene
 from toolimit.tools import ToolPose
 from toolimit.trajopt import from_original_spade_tip, load_pose_targets
+from toolimit.trajopt.result import TRAJECTORY_NPZ
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("TOOLIMIT_SHARED", ROOT.parent / "shared")) / "data" / "video_demos"
@@ -153,12 +157,13 @@ def demo_path(name: str) -> Path:
     return SHARED / f"{name}.npz" if name in AUTHORS_MOTIONS else ROOT / "data" / "demos" / f"{name}.npz"
 
 
-def stages(name: str, out: Path) -> dict[str, Any]:
-    """Stages ii-iii with the full preset's settings and the tool_only and trajopt cells (module docstring)."""
+def stages(name: str, folder: Path, run: bool) -> dict[str, Any]:
+    """Stages ii-iii with the full preset's settings in ``folder`` (made when ``run``, else found
+    there) and the tool_only and trajopt cells (module docstring)."""
     experiment = Experiment("spade", "3d", "panda", demo_path(name))
     settings = preset("full").settings(experiment, seed=0)
-    folder = out / name
-    run_stages(experiment.demo, folder, "spade", "panda", "3d", settings, progress=False, stages=STAGES[:2])
+    if run:
+        run_stages(experiment.demo, folder, "spade", "panda", "3d", settings, progress=False, stages=STAGES[:2])
     task = task_from_pipeline(folder / "alignment", folder / "trajectory", seed=settings.learning.seed)
     episodes, seed = settings.evaluation.episodes, settings.evaluation.seed
     cells = {
@@ -212,32 +217,41 @@ def main() -> int:
     parser.add_argument("--demos", default="", help="comma-separated: spade_00..spade_04, spade_video1_aligned")
     parser.add_argument("--out", type=Path, default=Path("runs/heap_settle"), help="stage folders (per label)")
     parser.add_argument("--results", type=Path, default=RESULTS, help="the results JSON")
+    parser.add_argument("--stages-of", default=None, help="measure the cells on this label's finished stages")
     args = parser.parse_args()
     demos = [d for d in args.demos.split(",") if d]
     for name in demos:
         if not demo_path(name).is_file():
             print(f"--demos: {demo_path(name)} not found", file=sys.stderr)
             return 2
+        made = args.out / str(args.stages_of) / name / "trajectory" / TRAJECTORY_NPZ
+        if args.stages_of is not None and not made.is_file():
+            print(f"--stages-of: {made} not found (run that label's stages first)", file=sys.stderr)
+            return 2
     if not all((SHARED / f"{name}.npz").is_file() for name in AUTHORS_MOTIONS):
         print(f"{SHARED}: the authors' recordings are not there (set TOOLIMIT_SHARED)", file=sys.stderr)
         return 2
     record = json.loads(args.results.read_text()) if args.results.is_file() else {"commit": "per run", "runs": {}}
     run = record["runs"].setdefault(args.label, {})
-    run["commit"] = subprocess.run(
-        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-    ).stdout.strip()
-    run["command"] = "python benchmarks/heap_settle.py " + " ".join(sys.argv[1:])
-    run["load_at_start"] = os.getloadavg()[0]
+    made_by = {  # each part records the call that measured it
+        "commit": subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        ).stdout.strip(),
+        "command": "python benchmarks/heap_settle.py " + " ".join(sys.argv[1:]),
+        "load_at_start": os.getloadavg()[0],
+    }
     if not args.skip_scene:
-        run["reference"] = reference()
+        run["reference"] = reference() | made_by
         print(json.dumps(run["reference"]))
-        run["slump"] = slump()
+        run["slump"] = slump() | made_by
         print(json.dumps(run["slump"]))
         save_json(args.results, record)
     for name in demos:
         started = time.perf_counter()
-        run.setdefault("stages", {})[name] = stages(name, args.out / args.label)
-        print(name, json.dumps(run["stages"][name]), f"{time.perf_counter() - started:.0f} s")
+        folder = args.out / (args.stages_of or args.label) / name
+        measured = stages(name, folder, run=args.stages_of is None)
+        run.setdefault("stages", {})[name] = measured | made_by | {"stages_of": args.stages_of or args.label}
+        print(name, json.dumps(measured), f"{time.perf_counter() - started:.0f} s")
         save_json(args.results, record)
     ratios(record["runs"])
     return 0
