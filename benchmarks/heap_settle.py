@@ -174,7 +174,7 @@ def stages(name: str, folder: Path, run: bool) -> dict[str, Any]:
         method: {"goal_reward": cell.goal_reward, "success_rate": cell.success_rate} for method, cell in cells.items()
     }
     record["candidate"] = int(task.source["candidate"])
-    record["stage_times_s"] = json.loads((folder / "run.json").read_text())
+    record["stage_times_s"] = json.loads((folder / "run.json").read_text())["stage_times_s"]
     return record
 
 
