@@ -37,7 +37,7 @@ parameters, mean final goal reward):
 * the blade is a box with a rim, not the original mesh; its "about 0.17 m x 0.12 m" is read as
   0.17 m across and 0.12 m along the handle (the other reading carries less sand), and the rim's
   5 cm height stands for the dish of a real blade (the height that carried most on the two
-  motions; the figures are in docs/history.md#scenes);
+  motions with the former heap; the figures are in docs/history.md#scenes);
 * friction is Coulomb friction by position (particles module); its coefficients are the
   original's. They keep the load of a blade tilted as the real recordings tilt it: carrying from
   the deposit towards the box (tip above 10 cm, outside the box's square), the blade's face is at
