@@ -7,9 +7,10 @@ document (x-z vertical plane or x-y horizontal plane) and ignore the other coord
 
 Scenes are *batched*: ``reset(..., batch_size=B)`` creates B independent instances of the same
 parameters, each with its own randomness where the scene has some (the planar sand's jitter, the
-grass's placement), so the 10 replays of an alignment sample run as one call. A position parameter may also be given per instance, (B, 3) (the
-learner's reset noise, domain randomisation's goal boxes). Every per-instance quantity has the
-batch on axis 0; B = 1 is the ordinary case.
+grass's placement), so the 10 replays of an alignment sample run as one call. A position
+parameter may also be given per instance, (B, 3) (the learner's reset noise, domain
+randomisation's goal boxes). Every per-instance quantity has the batch on axis 0; B = 1 is the
+ordinary case.
 """
 
 from __future__ import annotations
