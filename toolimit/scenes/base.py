@@ -6,10 +6,11 @@ use the same calls. Frames: world, metres, z up, ground at z = 0; planar scenes 
 document (x-z vertical plane or x-y horizontal plane) and ignore the other coordinate.
 
 Scenes are *batched*: ``reset(..., batch_size=B)`` creates B independent instances of the same
-parameters, each with its own randomness (sand jitter, grass placement), so the 10 replays of an
-alignment sample run as one call. A position parameter may also be given per instance, (B, 3) (the
-learner's reset noise, domain randomisation's goal boxes). Every per-instance quantity has the
-batch on axis 0; B = 1 is the ordinary case.
+parameters, each with its own randomness where the scene has some (the planar sand's jitter, the
+grass's placement), so the 10 replays of an alignment sample run as one call. A position
+parameter may also be given per instance, (B, 3) (the learner's reset noise, domain
+randomisation's goal boxes). Every per-instance quantity has the batch on axis 0; B = 1 is the
+ordinary case.
 """
 
 from __future__ import annotations

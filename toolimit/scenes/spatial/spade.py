@@ -10,14 +10,16 @@ World frame: metres, z up, ground z = 0. The scene is the original experiments' 
   ``GOAL_WALL_HEIGHT`` (7 cm) high, axis-aligned, centred at ``goal_position``; the ground is its
   floor. Both positions may be (B, 3), one per instance (the learner's reset noise, domain
   randomisation's boxes): each instance has its own wall set, and the goal region follows it;
-* ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap**: as in the
-  original, dropped once from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of
-  height), simulated to rest and cached (:func:`settled_heap`), then moved to the deposit at
-  every reset, each instance shifted by its own seeded offset of up to +-2 cm in x and y (the
-  instances' own randomness). At 200 spheres the heap is not at rest in the deposit: 20 spheres
-  leaned on the pen's walls, 2 cm inside the deposit's, and it slumps by up to 7 cm over the first
-  100-150 steps of every episode (measured; it costs most of the sand's time when the blade stays
-  away, :mod:`toolimit.scenes.spatial.particle_kernels`);
+* ``n_spheres`` (default 200) sand spheres of radius 2 cm start as a **heap**, built as the
+  original builds it (``SpadeTaskScene.scene_setup``): dropped once into the deposit's own three
+  walls from a column (N(0, 5 cm) horizontal offsets, one sphere every 0.1 m of height),
+  simulated to rest and cached in the deposit's frame (:func:`settled_heap`), then placed in the
+  deposit at every reset: moved to ``sand_position`` and turned by ``sand_yaw``. The original
+  translates its heap only: its deposit's yaw is fixed for an environment and the heap was
+  settled in the deposit already turned by it; here the yaw is a parameter of every reset (the
+  alignment samples it), and a heap translated but not turned would put the sand that settled
+  against the open side on a wall. The scene has no randomness of its own: every instance starts
+  from the same heap (the learner's reset noise moves each instance's deposit and box);
 * the sand (:data:`AUTHORS_SAND`): spheres that do not rotate (the original damps their rotation),
   sphere-sphere friction 5, sphere-spade and sphere-ground 2.5 (PhysX averages 5 with the spade's
   and the ground's 0.1), sphere-wall 3 (average of 5 and 1), speed capped at 1 m/s, 240 Hz (10
@@ -32,12 +34,10 @@ Differences from the original, each measured (authors' aligned spade motions
 ``toolimit.trajopt.from_original_spade_tip``, replayed tool-only 10 times in their own scene
 parameters, mean final goal reward):
 
-* the heap is dropped into a closed 0.36 m square pen: dropped freely it spreads to 0.23 m from
-  its centre, beyond the deposit's 0.2 m half side;
 * the blade is a box with a rim, not the original mesh; its "about 0.17 m x 0.12 m" is read as
   0.17 m across and 0.12 m along the handle (the other reading carries less sand), and the rim's
   5 cm height stands for the dish of a real blade (the height that carried most on the two
-  motions; the figures are in docs/history.md#scenes);
+  motions with the former heap; the figures are in docs/history.md#scenes);
 * friction is Coulomb friction by position (particles module); its coefficients are the
   original's. They keep the load of a blade tilted as the real recordings tilt it: carrying from
   the deposit towards the box (tip above 10 cm, outside the box's square), the blade's face is at
@@ -103,6 +103,8 @@ from toolimit.tools import ToolPose, rotation_z
 #: Inner side of the square sand deposit (m), its wall height and thickness (m).
 DEPOSIT_INNER = 0.4
 DEPOSIT_WALL_HEIGHT = 0.07
+#: The deposit's walls in its frame (:func:`_walls`): its +y side is open.
+DEPOSIT_WALLS = ("-x", "+x", "-y")
 #: Inner side of the goal box (m), its wall height (m).
 GOAL_INNER = 0.5
 GOAL_WALL_HEIGHT = 0.07
@@ -113,11 +115,9 @@ WALL_THICKNESS = 0.01
 #: Spheres in the box needed at a step for it to count towards success (scenes.base.SUCCESS_FRACTION of the steps).
 SUCCESS_SPHERES = 10
 #: The heap: spheres dropped one every HEAP_DROP_SPACING m in height from a column with
-#: horizontal N(0, HEAP_DROP_SIGMA) m offsets into a closed square pen of inner side HEAP_PEN, and
-#: simulated to rest; each instance then shifts it by up to +-(DEPOSIT_INNER - HEAP_PEN) / 2 in x and y.
+#: horizontal N(0, HEAP_DROP_SIGMA) m offsets into the deposit's three walls, simulated to rest.
 HEAP_DROP_SIGMA = 0.05
 HEAP_DROP_SPACING = 0.1
-HEAP_PEN = 0.36
 #: Largest sphere count of a scene.
 MAX_SPHERES = 400
 #: Most control steps the heap drop may take to come to rest.
@@ -158,27 +158,30 @@ def _walls(inner: float, height: float, sides: tuple[str, ...]) -> tuple[np.ndar
 
 @functools.lru_cache(maxsize=8)
 def settled_heap(n_spheres: int, material: GranularMaterial, substeps: int = 10) -> np.ndarray:
-    """(n_spheres, 3) centres of a heap at rest around the origin on the ground, metres (cached).
+    """(n_spheres, 3) centres of the heap at rest in the deposit, deposit frame, metres (cached).
 
-    As the original scene builds its pile: spheres dropped one every ``HEAP_DROP_SPACING`` m in
-    height from a column with N(0, ``HEAP_DROP_SIGMA``) horizontal offsets (seed 0), simulated
-    until every sphere rests, here inside a closed pen of inner side ``HEAP_PEN`` so that the heap
-    fits the deposit. Raises RuntimeError if it does not come to rest.
+    As the original scene builds its pile (``SpadeTaskScene.scene_setup``): spheres dropped one
+    every ``HEAP_DROP_SPACING`` m in height from a column with N(0, ``HEAP_DROP_SIGMA``) horizontal
+    offsets (seed 0; clipped to the deposit's inner square) into the deposit's own three walls,
+    simulated until every sphere rests. The deposit's frame: origin at the centre of its floor,
+    walls at x = -+DEPOSIT_INNER / 2 and y = -DEPOSIT_INNER / 2, open side +y. Spheres that roll out
+    of the open side or over a wall stay where they came to rest, as in the original. The
+    original's deposit is a 5 kg dynamic body set 5 cm above the ground for the drop: it falls onto
+    the ground in 0.1 s, before the second sphere lands, and the 0.2 kg of sand cannot slide it
+    (PhysX's averaged wall-ground friction 0.55 holds 27 N), so static walls on the ground make the
+    same heap. Raises RuntimeError if the heap does not come to rest.
     """
     rng = np.random.default_rng(0)
+    inside = DEPOSIT_INNER / 2 - material.radius
     start = np.column_stack(
         [
-            np.clip(
-                rng.normal(0.0, HEAP_DROP_SIGMA, (n_spheres, 2)),
-                -HEAP_PEN / 2 + material.radius,
-                HEAP_PEN / 2 - material.radius,
-            ),
+            np.clip(rng.normal(0.0, HEAP_DROP_SIGMA, (n_spheres, 2)), -inside, inside),
             material.radius + 0.01 + HEAP_DROP_SPACING * np.arange(n_spheres),
         ]
     )
-    centers, halves = _walls(HEAP_PEN, 2 * material.radius * n_spheres, ("-x", "+x", "-y", "+y"))
-    pen = StaticBoxes(centers, np.repeat(np.eye(3)[None], 4, 0), halves)
-    world = ParticleWorld(material, pen, None)
+    centers, halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, DEPOSIT_WALLS)
+    deposit = StaticBoxes(centers, np.repeat(np.eye(3)[None], len(DEPOSIT_WALLS), 0), halves)
+    world = ParticleWorld(material, deposit, None)
     world.reset(start[None])
     for step in range(HEAP_MAX_STEPS):
         world.advance(1.0 / CONTROL_FPS, substeps)
@@ -283,7 +286,8 @@ class SpatialSpadeScene(SceneBase):
     # --------------------------------------------------------------------------------- lifecycle
     def reset(self, params: SceneParams, rng: np.random.Generator, batch_size: int = 1) -> None:
         """B instances: walls at ``params`` (each position (3,) or (B, 3), per instance), the cached
-        heap shifted by ``rng`` per instance; no spade yet."""
+        heap in each deposit (placed and turned with it); no spade yet. The scene has no randomness
+        of its own; ``rng`` is accepted for the protocol."""
         batch_size = check_reset(self, params, batch_size)
         b = self.batch_size = batch_size
         on_ground = np.array([1.0, 1.0, 0.0])
@@ -291,7 +295,7 @@ class SpatialSpadeScene(SceneBase):
         self.sand_yaw = float(params["sand_yaw"])
         self.goal_position = instance_positions(params, "goal_position", b) * on_ground
         deposit_rotation = rotation_z(self.sand_yaw)
-        deposit_centers, deposit_halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, ("-x", "+x", "-y"))
+        deposit_centers, deposit_halves = _walls(DEPOSIT_INNER, DEPOSIT_WALL_HEIGHT, DEPOSIT_WALLS)
         goal_centers, goal_halves = _walls(GOAL_INNER, GOAL_WALL_HEIGHT, ("-x", "+x", "-y", "+y"))
         # one wall set per instance: the deposit's walls then the goal box's
         self.walls = StaticBoxes(
@@ -309,9 +313,8 @@ class SpatialSpadeScene(SceneBase):
             half_extents=np.broadcast_to(np.concatenate([deposit_halves, goal_halves]), (b, 7, 3)),
         )
         heap = settled_heap(self.n_spheres, self.material, self.substeps)
-        shift = rng.uniform(-1.0, 1.0, size=(b, 1, 3)) * on_ground * (DEPOSIT_INNER - HEAP_PEN) / 2
         self._world = ParticleWorld(self.material, self.walls, self.shapes, self.threads)
-        self._world.reset(self.sand_position[:, None] + (heap + shift) @ deposit_rotation.T)
+        self._world.reset(self.sand_position[:, None] + heap @ deposit_rotation.T)
         self._goal_reward = None
         #: Steps that ended with >= SUCCESS_SPHERES in the box.
         self.success_tracker = SuccessTracker(b)
