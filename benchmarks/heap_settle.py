@@ -45,9 +45,11 @@ from typing import Any
 import numpy as np
 
 from toolimit.artifacts import save_json
+from toolimit.demos.npz_format import original_scene_params
 from toolimit.experiments.cells import Experiment
 from toolimit.experiments.measure import measure_tool_only, measure_trajopt
 from toolimit.experiments.reproduce import preset
+from toolimit.learn.simulator import PARAM_NOISE_STD
 from toolimit.learn.task import task_from_pipeline
 from toolimit.pipeline.run import STAGES, run_stages
 from toolimit.scenes.replay import replay
@@ -67,8 +69,6 @@ SLUMP_STEPS = 150
 SLUMP_REPORTED = (25, 50, 100, 150)
 REPLAYS = 10
 NOISY_REPLAYS = 50
-#: The learner's reset noise on each position parameter, m (``toolimit.learn.simulator.PARAM_NOISE_STD``).
-PARAM_NOISE_STD = 0.01
 
 
 def authors_motion(name: str) -> tuple[ToolPose, dict[str, Any]]:
@@ -76,11 +76,7 @@ def authors_motion(name: str) -> tuple[ToolPose, dict[str, Any]]:
     path = SHARED / f"{name}.npz"
     data = np.load(path)
     targets = from_original_spade_tip(load_pose_targets(path))
-    params = {
-        "sand_position": data["sand_buffer_position"],
-        "sand_yaw": float(data["sand_buffer_yaw"]),
-        "goal_position": data["goal_box_position"],
-    }
+    params = original_scene_params(dict(data))
     return ToolPose(targets.positions, targets.rotations), params
 
 

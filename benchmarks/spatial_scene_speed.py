@@ -30,6 +30,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from toolimit.demos.npz_format import original_scene_params  # noqa: E402
 from toolimit.scenes import make_scene  # noqa: E402
 from toolimit.scenes.spatial.scoop import scripted_scoop  # noqa: E402
 from toolimit.scenes.spatial.spade import SpatialSpadeScene  # noqa: E402
@@ -50,11 +51,7 @@ def real_spade_demo() -> tuple[ToolPose, dict] | None:
         return None
     data = np.load(REAL_SPADE)
     targets = from_original_spade_tip(load_pose_targets(REAL_SPADE))
-    params = {
-        "sand_position": data["sand_buffer_position"],
-        "sand_yaw": float(data["sand_buffer_yaw"]),
-        "goal_position": data["goal_box_position"],
-    }
+    params = original_scene_params(dict(data))
     return ToolPose(targets.positions, targets.rotations), params
 
 
@@ -110,8 +107,10 @@ def main() -> None:
                 wall.append(seconds)
                 cpu.append(cpu_seconds)
             steps = len(scoop.position) * batch
-            print(f"  N={n_spheres:3d} B={batch:2d}: {steps / min(cpu):6.0f} instance steps per CPU s "
-                  f"({steps / min(wall):6.0f} per wall s; goal reward mean {scene.goal_reward().mean():.1f})")
+            print(
+                f"  N={n_spheres:3d} B={batch:2d}: {steps / min(cpu):6.0f} instance steps per CPU s "
+                f"({steps / min(wall):6.0f} per wall s; goal reward mean {scene.goal_reward().mean():.1f})"
+            )
 
     demos = [("scripted scoop, first 92 frames", ToolPose(scoop.position[:92], scoop.rotation[:92]), SCOOP_PARAMS)]
     real = real_spade_demo()
@@ -155,9 +154,11 @@ def main() -> None:
         motion = circular_sweep(np.asarray(first_position, dtype=float) * np.array([1.0, 1.0, 0.0]))
         for batch in (1, 10):
             seconds, cpu_seconds, _ = best_of(args.repeats, lambda: replay(scene, params, motion, batch))
-            print(f"{tool} 3d world, circular sweep ({len(motion.position)} steps incl. reset), B={batch:2d}: "
-                  f"{seconds:.3f} s wall, {cpu_seconds:.3f} s CPU = "
-                  f"{len(motion.position) / seconds:7.1f} control steps/s")
+            print(
+                f"{tool} 3d world, circular sweep ({len(motion.position)} steps incl. reset), B={batch:2d}: "
+                f"{seconds:.3f} s wall, {cpu_seconds:.3f} s CPU = "
+                f"{len(motion.position) / seconds:7.1f} control steps/s"
+            )
 
 
 if __name__ == "__main__":

@@ -78,7 +78,9 @@ def test_a_slow_smooth_trajectory_keeps_its_timing(write_trajectory, tmp_path):
     np.testing.assert_allclose(positions[-1], q[-1], atol=1e-12)
     assert summary["path_deviation_rad"] < 1e-3  # a smooth path is followed closely
     assert summary["joint_names"] == list(PANDA_JOINTS)
-    assert summary["limits"]["jerk_rad_s3"] == pytest.approx([0.95 * j for j in (7500, 3750, 5000, 6250, 7500, 1e4, 1e4)])
+    assert summary["limits"]["jerk_rad_s3"] == pytest.approx(
+        [0.95 * j for j in (7500, 3750, 5000, 6250, 7500, 1e4, 1e4)]
+    )
     assert all(check["passed"] for check in summary["checks"].values())
     assert summary["checks"]["velocity"]["max_ratio"] == pytest.approx(peaks["velocity"], rel=0.01)
     assert summary["base"]["yaw_rad"] == 1.5
@@ -128,8 +130,11 @@ def test_a_path_far_from_its_samples_is_warned(write_trajectory, tmp_path):
 
 def test_a_rate_giving_a_handful_of_samples_or_none_is_refused(write_trajectory, tmp_path):
     trajectory = load_trajectory(write_trajectory(np.stack([PANDA_MIDDLE, PANDA_MIDDLE + 1e-3]), DT))  # 0.125 s
-    for rate, problem in ((1e-3, "rate must be between 10 and 10000 Hz"), (1e15, "rate must be between"),
-                          (10.0, "gives fewer than 10 samples")):
+    for rate, problem in (
+        (1e-3, "rate must be between 10 and 10000 Hz"),
+        (1e15, "rate must be between"),
+        (10.0, "gives fewer than 10 samples"),
+    ):
         with pytest.raises(ValueError, match=problem):
             export_trajectory(trajectory, "panda", tmp_path / "out", rate=rate)
     assert not (tmp_path / "out").exists()
@@ -189,8 +194,10 @@ def test_too_fast_everywhere_is_retimed_and_respects_every_limit(write_trajector
 def test_refuses_a_path_sample_outside_a_position_limit(write_trajectory, tmp_path):
     q = slow_smooth()
     q[:, 3] = -1.5 + bump(1.5, 2 * np.pi / 4.0, DT * np.arange(len(q)))  # joint 4 up to 0 at 2 s > -0.0698
-    message = (r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0798 rad "
-               r"by 0\.0798 rad .*no retiming can fix .*\(11 of 97 samples are outside\)")
+    message = (
+        r"panda_joint4 position 0 rad at sample 48 \(t = 2\.0000 s .*\) is beyond its limit -0\.0798 rad "
+        r"by 0\.0798 rad .*no retiming can fix .*\(11 of 97 samples are outside\)"
+    )
     with pytest.raises(PathOutsideLimits, match=message):
         export_trajectory(load_trajectory(write_trajectory(q, DT)), "panda", tmp_path / "out")
     assert not (tmp_path / "out").exists()
@@ -216,16 +223,34 @@ def test_unsupported_robot_and_bad_files_are_refused(write_trajectory, tmp_path)
     bad = tmp_path / "bad"
     bad.mkdir()
     q = slow_smooth()
-    np.savez(bad / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT * 1.01, base=np.zeros(3),
-             joint_names=np.array(PANDA_JOINTS), dt=DT)
+    np.savez(
+        bad / "trajectory.npz",
+        q=q,
+        v=np.diff(q, axis=0) / DT * 1.01,
+        base=np.zeros(3),
+        joint_names=np.array(PANDA_JOINTS),
+        dt=DT,
+    )
     with pytest.raises(ValueError, match=r"trajectory.npz: v\[.*differs from"):
         load_trajectory(bad)
-    np.savez(bad / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.zeros(2),
-             joint_names=np.array(PANDA_JOINTS), dt=DT)
+    np.savez(
+        bad / "trajectory.npz",
+        q=q,
+        v=np.diff(q, axis=0) / DT,
+        base=np.zeros(2),
+        joint_names=np.array(PANDA_JOINTS),
+        dt=DT,
+    )
     with pytest.raises(ValueError, match=r"base must have shape \(3,\)"):
         load_trajectory(bad)
-    np.savez(bad / "trajectory.npz", q=q, v=np.diff(q, axis=0) / DT, base=np.zeros(3),
-             joint_names=np.array([f"j{i}" for i in range(7)]), dt=DT)
+    np.savez(
+        bad / "trajectory.npz",
+        q=q,
+        v=np.diff(q, axis=0) / DT,
+        base=np.zeros(3),
+        joint_names=np.array([f"j{i}" for i in range(7)]),
+        dt=DT,
+    )
     with pytest.raises(ValueError, match="do not match panda's joints"):
         export_trajectory(load_trajectory(bad), "panda", tmp_path / "out")
     with pytest.raises(ValueError, match="subdivisions must be a positive integer"):
@@ -250,8 +275,19 @@ def test_a_panda_policys_rollout_exports_within_the_published_limits(tmp_path):
     from toolimit.learn.training import load_policy
 
     learned = tmp_path / "learned"
-    tiny = ["--timesteps", "0", "--envs", "2", "--clone-rollouts", "1", "--clone-steps", "50", "--value-steps", "10",
-            "--quiet"]
+    tiny = [
+        "--timesteps",
+        "0",
+        "--envs",
+        "2",
+        "--clone-rollouts",
+        "1",
+        "--clone-steps",
+        "50",
+        "--value-steps",
+        "10",
+        "--quiet",
+    ]
     assert main(["learn", "--env", "toolimit/Spade3D-v0", "--out", str(learned), *tiny]) == 0
     model, task = load_policy(learned)
     rollout = evaluate(model, task, episodes=1, deterministic=True, seed=3).joint_positions[0]

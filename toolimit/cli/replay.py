@@ -32,14 +32,7 @@ from toolimit.cli import (
     check_scene,
     load_poses,
 )
-
-#: The original authors' aligned files' parameter names and the scenes' names for them.
-ORIGINAL_PARAMETER_NAMES = {
-    "sand_buffer_position": "sand_position",
-    "sand_buffer_yaw": "sand_yaw",
-    "goal_box_position": "goal_position",
-    "nail_position": "nail_position",
-}
+from toolimit.demos.npz_format import ORIGINAL_PARAMETER_NAMES, original_scene_params
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -113,16 +106,12 @@ def _params_from_json(path: Path, specs) -> dict:
 def _params_from_poses(path: Path, specs) -> dict:
     """The scene parameters stored in an original aligned poses file, under the scenes' names."""
     wanted = {spec.name for spec in specs}
-    found = {
-        ORIGINAL_PARAMETER_NAMES[key]: np.asarray(value, dtype=float)
-        for key, value in load_npz(path).items()
-        if ORIGINAL_PARAMETER_NAMES.get(key) in wanted
-    }
+    found = {name: value for name, value in original_scene_params(load_npz(path)).items() if name in wanted}
     missing = sorted(wanted - set(found))
     if missing:
         keys = sorted(key for key, name in ORIGINAL_PARAMETER_NAMES.items() if name in missing)
         raise CliError(f"--params-from-poses: {path} lacks {keys} (the scene needs {missing})")
-    return {name: float(value) if value.shape == () else value for name, value in found.items()}
+    return found
 
 
 def run(args: argparse.Namespace) -> int:

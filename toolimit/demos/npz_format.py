@@ -145,6 +145,25 @@ def load_video_trajectory(
     return _video_trajectory(path, arrays, tool, fps)
 
 
+#: The authors' aligned files' scene parameter names and the scenes' names for them.
+ORIGINAL_PARAMETER_NAMES = {
+    "sand_buffer_position": "sand_position",
+    "sand_buffer_yaw": "sand_yaw",
+    "goal_box_position": "goal_position",
+    "nail_position": "nail_position",
+}
+
+
+def original_scene_params(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray | float]:
+    """The scene parameters among an authors' aligned file's ``arrays``, under the scenes' names
+    (:data:`ORIGINAL_PARAMETER_NAMES`): positions (3,) m, world frame; yaws float rad."""
+    return {
+        ORIGINAL_PARAMETER_NAMES[key]: float(value) if np.ndim(value) == 0 else np.asarray(value, dtype=float)
+        for key, value in arrays.items()
+        if key in ORIGINAL_PARAMETER_NAMES
+    }
+
+
 def _tool_name(path: Path, tool: str | None) -> str:
     """The explicit ``tool``, else the known tool name the file name starts with."""
     if tool is not None:

@@ -94,7 +94,6 @@ class MotionBound:
         moved = np.clip(q + velocity * dt, self.lower, self.upper)
         return moved, (moved - q) / dt
 
-
     def braking(self, q: np.ndarray, dt: float) -> np.ndarray:
         """(K, N) joint samples, one every ``dt`` s, that continue the path q (T+1, N) rad from its last
         step's velocity, slowing by the acceleration bound each step, until every joint can stop
