@@ -27,8 +27,9 @@ RECIPES: dict[tuple[str, str, str], tuple[str, int, tuple[float, ...]]] = {
     ("spade", "planar", "planar3"): ("spade_03", 10, (1.0,)),
     ("hammer", "planar", "planar3"): ("hammer_00", 10, (1.0,)),
     ("scythe", "planar", "panda"): ("scythe_00", 10, (1.0,)),
-    # the pipeline's 3D defaults: 40 candidates at real time (a slowed episode loses the sand)
-    ("spade", "3d", "panda"): ("spade_01", 40, (1.0,)),
+    # the pipeline's 3D defaults: 40 candidates at real time (a slowed episode loses the sand);
+    # spade_00, whose tool alone succeeds with the deposit's heap (spade_01's earns 2 spheres)
+    ("spade", "3d", "panda"): ("spade_00", 40, (1.0,)),
     # the hammer and the scythe at real time: a slowed episode misses their first-second window
     ("hammer", "3d", "panda"): ("hammer_00", 5, (1.0,)),
     # 20 scythe candidates: about half earn their first stalk by the roll's turn at a keypoint, and

@@ -55,8 +55,9 @@ DEFAULT_SUBDIVISIONS = 4
 MAX_SUBDIVISIONS = 64
 #: Rounds of local stretching before the final uniform stretch.
 _MAX_ROUNDS = 200
-#: Relative headroom of each stretch, so that a control point stretched onto its limit is not
-#: judged over it by rounding.
+#: Relative headroom kept under every limit: a control point within it of a limit (a path learnt on
+#: its bound, a braking at the acceleration limit) is stretched to twice it below, so that the
+#: samples are not judged over the limit by rounding.
 _HEADROOM = 1e-9
 METHOD = (
     "clamped cubic B-spline in time with the optimised joint samples as control points (ends repeated: "
@@ -220,7 +221,8 @@ def _ratios(spline: BSpline, order: int, bound: np.ndarray) -> np.ndarray:
 
 
 def _stretch_per_span(control: np.ndarray, spans: np.ndarray, bounds: tuple[np.ndarray, ...]) -> np.ndarray:
-    """Factor (>= 1) per span that brings every derivative control point over its limit onto it.
+    """Factor (>= 1) per span that brings every derivative control point over its limit, or within
+    rounding of it, just under it.
 
     The i-th control point of the k-th derivative depends on the knots t_{i+1}..t_{i+k+3}, i.e. on
     the interior spans i-2 .. i+k-1 (the clamped ends' zero spans aside); stretching all of them by
@@ -230,8 +232,8 @@ def _stretch_per_span(control: np.ndarray, spans: np.ndarray, bounds: tuple[np.n
     stretch = np.ones_like(spans)
     for order, bound in enumerate(bounds, 1):
         ratios = _ratios(spline, order, bound)
-        for i in np.nonzero(ratios > 1.0)[0]:
+        for i in np.nonzero(ratios > 1.0 - _HEADROOM)[0]:  # on a limit: rounding may carry a sample past it
             first, last = max(0, i - DEGREE + 1), min(len(spans), i + order)
-            factor = ratios[i] ** (1.0 / order) * (1.0 + _HEADROOM)
+            factor = (ratios[i] / (1.0 - 2.0 * _HEADROOM)) ** (1.0 / order)
             stretch[first:last] = np.maximum(stretch[first:last], factor)
     return stretch
