@@ -1,4 +1,4 @@
-"""The 3D spade's sand heap at reset: how still it lies, and what the spade carries from it (issue 51).
+"""The 3D spade's sand heap at reset: how still it lies, and what the spade carries from it.
 
 Measures the heap of the code it runs with (``toolimit.scenes.spatial.spade.settled_heap``) and
 records it under ``--label`` in ``benchmarks/results/heap_settle.json``, beside the other labels

@@ -28,7 +28,7 @@ its handle along the tip frame's -z (the authors' ``HammerTool`` model) instead 
 whose axis turns 157 and 125 deg in one frame (frames 26 and 38: the tip frame's x and y flip about a
 steady z).
 
-Also the issue's camera (issue 50): spade video 1 seen from 3.5 m along the horizontal direction of
+Also the camera on which the lift once failed: spade video 1 seen from 3.5 m along the horizontal direction of
 least motion, 1.2 m high, f = 1000 px, on both sides of the motion, noise seeds 0-4.
 
     python benchmarks/video_lift_cameras.py [--shared ../shared] [--cameras 40] [--out benchmarks/results/video_lift]

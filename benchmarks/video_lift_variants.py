@@ -254,7 +254,7 @@ def lift(raw: EndpointTracks, camera: Camera, truth: ToolDemo, settings: LiftSet
             ) ** 2
         return squared, np.sqrt(spread)
 
-    # issue 50: the sides follow the hint, moved only at a clear zero crossing, judged with the
+    # the sides follow the hint, moved only at a clear zero crossing, judged with the
     # offset's spread as the lift computes it (the committed variants.json predates this choice)
     positive, spread = np.maximum(squared, 0.0), squared_spread(pixels, noise)[1]
     offset_sigma = (np.sqrt(positive + spread) - np.sqrt(np.maximum(positive - spread, 0.0))) / 2

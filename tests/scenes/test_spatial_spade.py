@@ -137,7 +137,7 @@ def test_first_step_places_the_tool_without_velocity() -> None:
     The placement's 20 position passes leave some overlaps in a packed heap, which the first step
     resolves with velocity: at this pose 3 of the 200 spheres reach the 1 m/s cap (with the former
     pen-settled heap none passed 0.5 m/s here, but 1-6 did at 6 of 15 neighbouring poses,
-    issue 51's measurement), so the check bounds how many are fast, not the fastest."""
+    the heap's measurement, benchmarks/heap_settle.py), so the check bounds how many are fast, not the fastest."""
     scene = SpatialSpadeScene()
     scene.reset(PARAMS, np.random.default_rng(2))
     pose = scripted_scoop(PARAMS)

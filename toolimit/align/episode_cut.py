@@ -9,13 +9,14 @@ stalk cut), append ``AFTER_REWARD_FRAMES`` (5) steps, and keep the last ``KEPT_F
 (fewer when the motion is shorter) as the trajectory optimisation's target; the policy's horizon is
 that trajectory's length (``train_ppo.py``), 20 steps = 0.83 s at 24 Hz, inside the success window.
 
-One departure (docs/original_setup.md#the-timed-tools-and-the-talos-as-the-authors-built-them): the authors' 5 appended steps hold the tool
-still at its first rewarded pose (``add_zero_end_steps``); here they are the motion's own next 5
-frames (the last pose held only past the motion's end). Held still, the target stops a scythe's
-draw from 1.3-1.7 m/s within one 42 ms step, some 36 m/s^2, which no arm within its acceleration
-limits follows: the Panda's trajectory then tracks its candidates' draws too slowly to cut (0.1-0.4
-stalks in the learning task on ``scythe_00``, 1.1-1.4 with the motion carried on). A person does not stop the blade at the first
-stalk either.
+One departure (docs/original_setup.md#the-timed-tools-and-the-talos-as-the-authors-built-them):
+the authors' 5 appended steps hold the tool still at its first rewarded pose
+(``add_zero_end_steps``); here they are the motion's own next 5 frames (the last pose held only
+past the motion's end). Held still, the target stops a scythe's draw from 1.3-1.7 m/s within one
+42 ms step, some 36 m/s^2, which no arm within its acceleration limits follows: the Panda's
+trajectory then tracks its candidates' draws too slowly to cut (0.1-0.4 stalks in the learning
+task on ``scythe_00``, 1.1-1.4 with the motion carried on). A person does not stop the blade at
+the first stalk either.
 
 The alignment finds the cut for each candidate (:mod:`toolimit.align.search`) and every later
 stage reads the cut motion from the alignment's files, which record it (``first_reward_frame``,

@@ -4,10 +4,11 @@ The path and its timing are one curve: a clamped cubic B-spline in time (``scipy
 whose control points are the path's samples q_0..q_T, the first and the last repeated three times so
 that the robot starts and stops at rest with zero acceleration. A path whose last step still moves
 (a learnt motion ends where its episode ends, not at rest) faster than one step can stop is first
-continued by braking at the acceleration limit (:meth:`MotionBound.braking <toolimit.robots.motion_bound.MotionBound.braking>`):
-a real arm cannot stop within a step, and stopping it on the path's last samples would slow the
-motion's end down (a scythe's 0.83 s draw, measured: its last steps stretched, 1.17 s in all). Two properties of B-splines make
-the limits hold everywhere, not only at the samples:
+continued by braking at the acceleration limit
+(:meth:`MotionBound.braking <toolimit.robots.motion_bound.MotionBound.braking>`): a real arm cannot
+stop within a step, and stopping it on the path's last samples would slow the motion's end down (a
+scythe's 0.83 s draw, measured: its last steps stretched, 1.17 s in all). Two properties of
+B-splines make the limits hold everywhere, not only at the samples:
 
 * **position**: on each span the curve is a convex combination of four consecutive control points,
   so no joint ever leaves the range of the samples around it: a path whose samples are within the
