@@ -36,13 +36,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from provenance import command, commit
 
 from toolimit.artifacts import save_json
 from toolimit.demos.npz_format import original_scene_params
@@ -230,10 +230,8 @@ def main() -> int:
     record = json.loads(args.results.read_text()) if args.results.is_file() else {"commit": "per run", "runs": {}}
     run = record["runs"].setdefault(args.label, {})
     made_by = {  # each part records the call that measured it
-        "commit": subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-        ).stdout.strip(),
-        "command": "python benchmarks/heap_settle.py " + " ".join(sys.argv[1:]),
+        "commit": commit(short=True),
+        "command": command(),
         "load_at_start": os.getloadavg()[0],
     }
     if not args.skip_scene:

@@ -14,7 +14,8 @@ velocity between control poses, as the scene moves the tool) at the scene's 10 s
   0.1 m width, m from its centre), against all stalks;
 - for each control step where stalks fall: how many, the edge centre's median velocity along the
   edge normal (the snath, towards the hands: the rule's approach) and along the blade, the
-  normal's elevation above horizontal (the rule allows 30 degrees) and the edge's height.
+  normal's elevation above horizontal (the rule allows 30 degrees) and the edge's height;
+- the commit and the command that made it.
 
 About 10 s on one core for 200 episodes.
 
@@ -28,6 +29,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from provenance import command, commit
 
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.training import load_policy
@@ -101,6 +103,8 @@ def main() -> None:
             }
         )
     record = {
+        "commit": commit(short=True),
+        "command": command(),
         "policy": str(args.policy),
         "episodes": args.episodes,
         "seed": args.seed,

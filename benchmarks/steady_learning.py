@@ -29,11 +29,11 @@ import argparse
 import json
 import os
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
+from provenance import commit
 from scipy.spatial.transform import Rotation
 
 from toolimit.artifacts import save_json
@@ -123,9 +123,7 @@ def run_one(name: str, demo: str, seed: int, out: Path) -> dict:
         "shortlist": trajectory.get("shortlist"),
         "clone_check": json.loads((out / name / "learning" / CLONING_JSON).read_text()).get("clone_check"),
         "load_at_start": load,
-        "commit": subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-        ).stdout.strip(),
+        "commit": commit(short=True),
     }
 
 

@@ -28,13 +28,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from provenance import command, commit
 
 from toolimit.demos import ToolDemo, load_video_trajectory, synthesize_motion
 from toolimit.demos.video import (
@@ -173,8 +172,7 @@ def main() -> None:
     write_camera(camera, args.out / "spade_video1.camera.json")
     write_tracks(perturbed(project_demo(spade, camera), NOISE_PX, DROP, 0), args.out / "spade_video1.tracks.csv")
     print(f"wrote {args.out / 'spade_video1.tracks.csv'} and spade_video1.camera.json (3 px, 5 % dropped, seed 0)")
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True, text=True).stdout.strip()
-    result: dict = {"command": " ".join(["python", *sys.argv]), "commit": commit or "unknown", "lift": rows}
+    result: dict = {"command": command(), "commit": commit(), "lift": rows}
     try:
         result["render_track"] = render_and_track(spade)
         figures = result["render_track"]

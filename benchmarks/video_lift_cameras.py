@@ -41,12 +41,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from provenance import command, commit
 
 from toolimit.demos import ToolDemo, load_video_trajectory, synthesize_motion
 from toolimit.demos.video import Camera, LiftSettings, handle_side, lift_tracks, look_at, perturbed, project_demo
@@ -228,15 +227,6 @@ def issue_camera(truth: ToolDemo) -> list[dict]:
     return found
 
 
-def commit() -> str:
-    try:
-        return subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--shared", type=Path, default=REPO.parent / "shared")
@@ -246,7 +236,7 @@ def main() -> None:
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     result: dict = {
-        "command": " ".join(["python", *sys.argv]),
+        "command": command(),
         "commit": commit(),
         "noise_px": NOISE_PX,
         "dropped": DROP,
