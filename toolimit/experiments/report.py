@@ -3,12 +3,13 @@
 ``results.json`` holds the preset, ``seeds`` (those with cells), ``cells`` (each a
 :class:`~toolimit.experiments.cells.CellResult` record with its ``seed``: ``tool``, ``demo``,
 ``robot``, ``method``, ``goal_reward``, ``success_rate``, ...), ``summary`` (each cell over its
-seeds, :class:`~toolimit.experiments.summary.CellSummary`) and ``aggregates`` (each method over
-its demonstrations, :class:`~toolimit.experiments.summary.MethodSummary`). A ``results.json``
+seeds, :class:`~toolimit.experiments.summary.CellSummary`), ``aggregates`` (each method over
+its demonstrations, :class:`~toolimit.experiments.summary.MethodSummary`) and ``claims`` (the
+paper's claims read off them, :class:`~toolimit.experiments.claims.ClaimReading`). A ``results.json``
 written before there were seeds (a ``preset`` with its ``seed``, cells without) reads as that one
 seed's (:func:`read_results`). The first table has one row per experiment and one column per
 method, "goal reward [95 % interval] (success [95 % interval])"; the second one row per method of
-a tool, world and robot over its demonstrations. The figure is the paper's: one group of bars per
+a tool, world and robot over its demonstrations; the third one row per claim and group. The figure is the paper's: one group of bars per
 experiment, the goal reward on a log scale with its interval, the success threshold drawn; one
 figure per tool, since the goal rewards of different tools do not compare.
 """
@@ -21,6 +22,7 @@ from typing import Any
 
 from toolimit.artifacts import save_json, save_text
 from toolimit.experiments.cells import METHODS, CellResult
+from toolimit.experiments.claims import ClaimReading, claims_table, read_claims
 from toolimit.experiments.intervals import Interval
 from toolimit.experiments.summary import METHOD, CellSummary, MethodSummary, Runs, summarise_cells, summarise_methods
 from toolimit.viz.svg_chart import BarGroup, log_bar_chart_svg
@@ -122,9 +124,12 @@ def _by_experiment(summaries: Sequence[CellSummary]) -> dict[tuple[str, str, str
 
 
 def results_markdown(
-    summaries: Sequence[CellSummary], aggregates: Sequence[MethodSummary], seeds: Sequence[int]
+    summaries: Sequence[CellSummary],
+    aggregates: Sequence[MethodSummary],
+    claims: Sequence[ClaimReading],
+    seeds: Sequence[int],
 ) -> str:
-    """``results.md``: both tables, with how to read them."""
+    """``results.md``: the three tables, with how to read them."""
     over = f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}" if seeds else "no seed yet"
     return (
         f"# Results over {over}\n\n"
@@ -135,7 +140,12 @@ def results_markdown(
         + "\nEach method over its demonstrations: the interquartile mean of the runs' success rates (a run: "
         "one seed on one demonstration) with its stratified bootstrap interval, and the probability that "
         "the final policy beats the method on a demonstration, on the demonstrations both were measured on; "
-        "[-]: one run per demonstration, no interval.\n\n" + aggregates_table(aggregates)
+        "[-]: one run per demonstration, no interval.\n\n"
+        + aggregates_table(aggregates)
+        + "\nThe paper's claims, read off these intervals (`toolimit.experiments.claims`): how many items "
+        "meet each claim's test on their whole interval, on their mean and anywhere within their interval; "
+        "a claim holds when enough meet it on their whole interval. Few seeds make the intervals too narrow.\n\n"
+        + claims_table(claims)
     )
 
 
@@ -144,15 +154,20 @@ def write_results(out_dir: Path, runs: Runs, preset: dict[str, Any]) -> list[Pat
     (seed -> cells) into ``out_dir``; the paths."""
     seeds = sorted(seed for seed, cells in runs.items() if cells)
     summaries, aggregates = summarise_cells(runs), summarise_methods(runs)
+    claims = read_claims(summaries, aggregates)
     record = {
         "preset": preset,
         "seeds": seeds,
         "cells": [cell.record() | {"seed": seed} for seed in seeds for cell in runs[seed]],
         "summary": [summary.record() for summary in summaries],
         "aggregates": [aggregate.record() for aggregate in aggregates],
+        "claims": [claim.record() for claim in claims],
     }
     save_json(out_dir / RESULTS_JSON, record)
-    written = [out_dir / RESULTS_JSON, save_text(out_dir / RESULTS_MD, results_markdown(summaries, aggregates, seeds))]
+    written = [
+        out_dir / RESULTS_JSON,
+        save_text(out_dir / RESULTS_MD, results_markdown(summaries, aggregates, claims, seeds)),
+    ]
     groups = _by_experiment(summaries)
     for tool in dict.fromkeys(summary.tool for summary in summaries):
         bars = [
