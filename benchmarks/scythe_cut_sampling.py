@@ -12,6 +12,9 @@ velocity between control poses, as the scene moves the tool) at the scene's 10 s
 - stalks cut and success at both rates (the 10-sub-step replay must equal the scene's own count);
 - the stalks left uncut, by where they stood in the patch (x along its 0.4 m length, y along its
   0.1 m width, m from its centre), against all stalks;
+- the success of the episodes with no stalk within ``--end-zone`` of either end of the patch's
+  length, and of the others (a draw that does not reach the ends fails only where a stalk stands
+  there);
 - for each control step where stalks fall: how many, the edge centre's median velocity along the
   edge normal (the snath, towards the hands: the rule's approach) and along the blade, the
   normal's elevation above horizontal (the rule allows 30 degrees) and the edge's height;
@@ -46,6 +49,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--seed", type=int, default=5000)
     parser.add_argument("--fine", type=int, default=100, help="sub-steps per control step of the fine test")
+    parser.add_argument("--end-zone", type=float, default=0.035, help="m from either end of the patch's length")
     parser.add_argument("--out", type=Path, required=True, help="JSON file written")
     args = parser.parse_args()
     try:
@@ -83,6 +87,8 @@ def main() -> None:
     in_patch = stalks - patch[:, None, :2]  # (B, N, 2) m from the patch's centre
     half_length, half_width = np.array(scene.patch_size) / 2
     x_range, y_range = (-half_length, half_length), (-half_width, half_width)
+    near_ends = (np.abs(in_patch[..., 0]) > half_length - args.end_zone).any(axis=1)  # (B,)
+    success = coarse.all(axis=1)
     rows = []
     for k in sorted(set(fine[fine_cut].tolist())):
         edge = [
@@ -111,7 +117,7 @@ def main() -> None:
         "substeps": scene.substeps,
         "fine_substeps": args.fine,
         "stalks_cut_mean": float(coarse.sum(axis=1).mean()),
-        "success_rate": float(coarse.all(axis=1).mean()),
+        "success_rate": float(success.mean()),
         "stalks_cut_mean_fine": float(fine_cut.sum(axis=1).mean()),
         "success_rate_fine": float(fine_cut.all(axis=1).mean()),
         "uncut": int((~coarse).sum()),
@@ -120,6 +126,10 @@ def main() -> None:
         "all_by_patch_x": np.histogram(in_patch[..., 0], X_BINS, x_range)[0].tolist(),
         "uncut_by_patch_y": np.histogram(in_patch[~coarse][:, 1], Y_BINS, y_range)[0].tolist(),
         "all_by_patch_y": np.histogram(in_patch[..., 1], Y_BINS, y_range)[0].tolist(),
+        "end_zone_m": args.end_zone,
+        "episodes_no_stalk_in_end_zones": int((~near_ends).sum()),
+        "success_no_stalk_in_end_zones": float(success[~near_ends].mean()) if (~near_ends).any() else None,
+        "success_a_stalk_in_end_zones": float(success[near_ends].mean()) if near_ends.any() else None,
         "cutting_steps": rows,
     }
     print(
@@ -132,6 +142,10 @@ def main() -> None:
     )
     print(
         f"uncut by patch y ({Y_BINS} bins over the width): {record['uncut_by_patch_y']} of {record['all_by_patch_y']}"
+    )
+    print(
+        f"no stalk within {args.end_zone} m of either end: {record['episodes_no_stalk_in_end_zones']} episodes, "
+        f"success {record['success_no_stalk_in_end_zones']}; the others: {record['success_a_stalk_in_end_zones']}"
     )
     for row in rows:
         print(

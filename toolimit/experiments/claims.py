@@ -31,7 +31,7 @@ from typing import Any
 from toolimit.experiments.intervals import Interval
 from toolimit.experiments.summary import METHOD, CellSummary, MethodSummary
 
-#: The success rate a cell must reach (the project's reading of "succeeds", 4 of 5 episodes).
+#: The success rate at which a cell succeeds (the rate the results pages call success).
 SUCCESS = 0.8
 #: The share of a group's demonstrations that must succeed: the paper's scythe, 4 of 5.
 DEMONSTRATIONS_SHARE = 0.8
