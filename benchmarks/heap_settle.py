@@ -42,7 +42,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from provenance import command, commit
 
 from toolimit.artifacts import save_json
 from toolimit.demos.npz_format import original_scene_params
@@ -57,6 +56,8 @@ from toolimit.scenes.spatial.spade import DEPOSIT_INNER, SpatialSpadeScene
 from toolimit.tools import ToolPose
 from toolimit.trajopt import from_original_spade_tip, load_pose_targets
 from toolimit.trajopt.result import TRAJECTORY_NPZ
+
+from provenance import command, commit
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("TOOLIMIT_SHARED", ROOT.parent / "shared")) / "data" / "video_demos"

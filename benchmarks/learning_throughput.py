@@ -42,10 +42,11 @@ import argparse
 import os
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import torch
@@ -225,7 +226,9 @@ def load_task(args: argparse.Namespace) -> tuple[str, LearningTask]:
 
 
 def _split(label: str, t: Throughput) -> str:
-    share = lambda seconds: 100 * seconds / t.wall_s
+    def share(seconds: float) -> float:
+        return 100 * seconds / t.wall_s
+
     return (f"{label}: {t.steps_per_s:7.0f} env steps/s ({t.steps} steps, {t.wall_s:.1f} s wall, {t.cpu_s:.1f} s CPU "
             f"main process); simulation {share(t.env_s):.0f} %, policy inference {share(t.inference_s):.0f} %, "
             f"PPO updates {share(t.update_s):.0f} %")

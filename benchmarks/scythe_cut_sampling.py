@@ -32,12 +32,13 @@ import json
 from pathlib import Path
 
 import numpy as np
-from provenance import command, commit
 
 from toolimit.learn.simulator import TaskSimulator
 from toolimit.learn.training import load_policy
 from toolimit.scenes.spatial.scythe import SpatialScytheScene
 from toolimit.scenes.spatial.tool_motion import interpolate_poses
+
+from provenance import command, commit
 
 #: Bins of the uncut stalks' patch coordinates: along the length (x) and the width (y).
 X_BINS, Y_BINS = 8, 4

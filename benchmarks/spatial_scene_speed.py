@@ -25,6 +25,7 @@ for _name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
     os.environ[_name] = "1"
 
 import argparse  # noqa: E402
+import functools  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -103,7 +104,7 @@ def main() -> None:
             wall, cpu = [], []
             for _ in range(args.repeats):
                 scene.reset(SCOOP_PARAMS, np.random.default_rng(0), batch)  # not timed
-                seconds, cpu_seconds, _ = best_of(1, lambda: step_through(scene, scoop))
+                seconds, cpu_seconds, _ = best_of(1, functools.partial(step_through, scene, scoop))
                 wall.append(seconds)
                 cpu.append(cpu_seconds)
             steps = len(scoop.position) * batch
@@ -121,7 +122,7 @@ def main() -> None:
     print("alignment sample = 10 replays as one B = 10 batch (reset + 92 steps + reward), 200 spheres:")
     for label, motion, params in demos:
         scene = SpatialSpadeScene()
-        seconds, cpu_seconds, reward = best_of(args.repeats, lambda: replay(scene, params, motion, 10))
+        seconds, cpu_seconds, reward = best_of(args.repeats, functools.partial(replay, scene, params, motion, 10))
         print(f"  {label}: {seconds:.2f} s wall, {cpu_seconds:.2f} s CPU (mean goal reward {np.mean(reward):.1f})")
     print("static surfaces win: deepest sphere penetration into the ground or a wall over every step (B = 10):")
     for label, motion, params in demos + [("scripted scoop, whole", scoop, SCOOP_PARAMS)]:
@@ -153,7 +154,7 @@ def main() -> None:
         first_position = next((v for v in params.values() if np.ndim(v) == 1), np.zeros(3))
         motion = circular_sweep(np.asarray(first_position, dtype=float) * np.array([1.0, 1.0, 0.0]))
         for batch in (1, 10):
-            seconds, cpu_seconds, _ = best_of(args.repeats, lambda: replay(scene, params, motion, batch))
+            seconds, cpu_seconds, _ = best_of(args.repeats, functools.partial(replay, scene, params, motion, batch))
             print(
                 f"{tool} 3d world, circular sweep ({len(motion.position)} steps incl. reset), B={batch:2d}: "
                 f"{seconds:.3f} s wall, {cpu_seconds:.3f} s CPU = "

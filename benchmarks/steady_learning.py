@@ -33,7 +33,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from provenance import commit
 from scipy.spatial.transform import Rotation
 
 from toolimit.artifacts import save_json
@@ -42,6 +41,8 @@ from toolimit.demos.npz_format import SPADE_TIP_TO_HANDLE, save_demo
 from toolimit.learn.task import TASK_NPZ, LearningTask
 from toolimit.learn.training import CLONING_JSON
 from toolimit.pipeline import PipelineSettings, run_pipeline
+
+from provenance import commit
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data" / "video_demos"

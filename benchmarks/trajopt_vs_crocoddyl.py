@@ -33,8 +33,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # trajopt_problem beside this script
 
-import trajopt_problem as tp  # noqa: E402
-
 from toolimit.artifacts import save_json  # noqa: E402
 from toolimit.compare.crocoddyl_tracking import solve_with_crocoddyl  # noqa: E402
 from toolimit.robots import make_robot  # noqa: E402
@@ -49,6 +47,8 @@ from toolimit.trajopt import (  # noqa: E402
     track,
 )
 from toolimit.trajopt.initial_guess import ik_rollout  # noqa: E402
+
+import trajopt_problem as tp  # noqa: E402
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = Path(os.environ.get("TOOLIMIT_SHARED", REPO_ROOT.parent / "shared")) / "data" / "video_demos"

@@ -33,7 +33,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from provenance import command, commit
 
 from toolimit.demos import ToolDemo, load_video_trajectory, synthesize_motion
 from toolimit.demos.video import (
@@ -46,6 +45,8 @@ from toolimit.demos.video import (
     write_camera,
     write_tracks,
 )
+
+from provenance import command, commit
 
 REPO = Path(__file__).resolve().parents[1]
 SEEDS = range(5)

@@ -45,13 +45,14 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from provenance import command, commit
 
 from toolimit.demos import ToolDemo, load_video_trajectory, synthesize_motion
 from toolimit.demos.video import Camera, LiftSettings, handle_side, lift_tracks, look_at, perturbed, project_demo
 from toolimit.demos.video.lift import LiftedDemo, handle_candidates, ray_plane_intersection
 from toolimit.demos.video.tracks import EndpointTracks
 from toolimit.errors import TrackError
+
+from provenance import command, commit
 
 REPO = Path(__file__).resolve().parents[1]
 NOISE_PX, DROP = 3.0, 0.05

@@ -15,9 +15,9 @@ from __future__ import annotations
 import argparse
 import importlib.metadata as metadata
 import re
-import tomllib
 from pathlib import Path
 
+import tomllib
 from packaging.requirements import Requirement
 
 REPO = Path(__file__).resolve().parents[1]

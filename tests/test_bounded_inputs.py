@@ -16,9 +16,9 @@ import pytest
 from toolimit.cli import main
 from toolimit.demos import ToolDemo, load_demo
 from toolimit.demos.tool_demo import MAX_DURATION_S, MAX_FPS, MAX_FRAMES, MIN_FPS
-from toolimit.errors import DemoError, InputError, InvalidSetting
 from toolimit.deploy.export import RATE_RANGE_HZ
 from toolimit.deploy.retime import MAX_SUBDIVISIONS
+from toolimit.errors import DemoError, InputError, InvalidSetting
 from toolimit.pipeline.settings import ExportSettings
 
 MAX_RATE_HZ = RATE_RANGE_HZ[1]

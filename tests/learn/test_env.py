@@ -10,10 +10,10 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import toolimit.learn  # noqa: F401  (registers the ids)
-from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, ToolUseEnv, env_id
-from toolimit.learn.shipped import environments
 import toolimit.learn.simulator as simulator_module
 from toolimit.learn import TaskSimulator, shipped_task
+from toolimit.learn.env import ENV_TOOLS, ENV_WORLDS, ToolUseEnv, env_id
+from toolimit.learn.shipped import environments
 from toolimit.learn.simulator import PARAM_NOISE_STD, velocity_penalty
 
 IDS = [env_id(tool, world) for tool, world in environments()]

@@ -7,6 +7,7 @@ import pytest
 
 from toolimit.trajopt import SqpOptions, TrackingProblem, TrackOptions, track
 from toolimit.trajopt.initial_guess import ik_rollout
+
 from trajopt_helpers import FPS, reachable_path, targets_of
 
 

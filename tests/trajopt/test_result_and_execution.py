@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 from toolimit.artifacts import json_text
+from toolimit.scenes import replay
 from toolimit.scenes.base import ParameterSpec
 from toolimit.tools import ToolPose
-from toolimit.scenes import replay
 from toolimit.trajopt import SqpOptions, TrackOptions, TrajectoryResult, execute_in_scene, track
 from toolimit.trajopt.execution import resample_joints
 from toolimit.trajopt.result import TimeScaleSearch, TrackingStatistics
+
 from trajopt_helpers import FPS, reachable_path, targets_of
 
 

@@ -6,11 +6,12 @@ import dataclasses
 
 import numpy as np
 import pytest
-from trajopt_helpers import FPS, reachable_path, targets_of
 
 from toolimit.robots.motion_bound import MotionBound
 from toolimit.trajopt import SqpOptions, TrackingProblem, TrackingWeights, solve_sqp
 from toolimit.trajopt.sqp import project_to_limits
+
+from trajopt_helpers import FPS, reachable_path, targets_of
 
 # a tiny velocity weight: the exact path is then (nearly) optimal
 PRECISE = TrackingWeights(position=1.0, rotation=0.5, velocity=1e-7)

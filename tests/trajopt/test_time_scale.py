@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 import toolimit.trajopt.time_scale as time_scale_module
-from toolimit.trajopt import SqpOptions, TrackOptions, TrackingWeights, choose_time_scale
+from toolimit.trajopt import SqpOptions, TrackingWeights, TrackOptions, choose_time_scale
 from toolimit.trajopt.result import TrackingStatistics
+
 from trajopt_helpers import reachable_path, targets_of
 
 

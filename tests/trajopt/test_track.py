@@ -9,6 +9,7 @@ import pytest
 from toolimit.robots import make_robot
 from toolimit.trajopt import PoseTargets, SqpOptions, TrackOptions, TrajectoryResult, base_guesses, track
 from toolimit.trajopt.track import base_in_footprints
+
 from trajopt_helpers import FPS, reachable_path, targets_of
 
 QUICK = SqpOptions(max_iterations=15)

@@ -6,8 +6,8 @@ import base64
 import gzip
 import os
 import re
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import meshcat
 import pytest

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -92,7 +91,7 @@ def test_trajectory_html_animates_robot_tool_and_targets(tmp_path, html_commands
     base = base_placement(robot, trajectory.base)
     last_link = [p for p in clips if p.startswith("/meshcat/robot/visuals/")][-1]
     link = [base @ m for m in transforms_of(clips[last_link])]
-    grip = [np.linalg.inv(l) @ t for l, t in zip(link, tool)]
+    grip = [np.linalg.inv(at_link) @ at_tool for at_link, at_tool in zip(link, tool)]
     for g in grip[1:]:
         np.testing.assert_allclose(g, grip[0], atol=1e-5)
     assert np.linalg.norm(link[-1][:3, 3] - link[0][:3, 3]) > 0.05
