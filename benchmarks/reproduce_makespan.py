@@ -1,8 +1,11 @@
 """The full preset's makespan for several training seeds, on one node and on N Ray nodes.
 
-Reads the per-cell ``wall_time_s`` of a full reproduction (benchmarks/results/reproduce/results.json,
-either layout; with several seeds, the first's) and takes every seed to do the same work. Two
-schedules:
+Reads the per-cell ``wall_time_s`` of a full reproduction (``--results``, by default
+benchmarks/results/reproduce/results.json, either layout; with several seeds, the first's), the
+cells it lacks from ``--fill-from`` (e.g. the baselines of another figure, said in the output), and
+takes every seed to do the same work. An experiment's preparation (its alignment and robot
+selection) is read from ``--preparations``, a reproduction's seed folder
+(``<experiment>/method/run.json``, its stage times), where given, else ``--prep-s``. Two schedules:
 
 - one node, ``toolimit reproduce --seed 0,1,2 --jobs J``: each (seed, experiment) one child, in
   the preset's order, seed after seed in one queue, each started on the first of J slots to free;
@@ -10,8 +13,8 @@ schedules:
   ``toolimit run``: the alignment, the selection, the learning);
 - N Ray nodes of ``cpus`` CPUs: ``toolimit reproduce --ray``'s tasks on N x cpus one-CPU slots,
   longest first among those ready (LPT list scheduling): per experiment a preparation (alignment
-  and robot selection: ``--prep-s`` seconds, which results.json does not hold apart; it is inside
-  the final cell's time), then its learning runs, released when the preparation ends: the method's
+  and robot selection, which results.json does not hold apart; it is inside the final cell's
+  time), then its learning runs, released when the preparation ends: the method's
   (the final cell's time less the preparation) and each baseline's. Once with the seeds one after
   another (one command: it runs its seeds in turn) and once all at once (one command per seed,
   started side by side), with the two lower bounds of the latter: the longest single run with its
@@ -24,6 +27,7 @@ randomisation runs (``toolimit learn --adr``) are one learning run each, which n
 they are listed apart with their own wall time.
 
     python benchmarks/reproduce_makespan.py [--seeds 3] [--jobs 2] [--nodes 8] [--cpus 2] [--prep-s 100]
+        [--results R.json] [--fill-from R.json] [--preparations runs/figure/seed_0]
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from __future__ import annotations
 import argparse
 import heapq
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 from toolimit.experiments.report import read_results
@@ -44,19 +49,45 @@ ADR_RUNS = tuple(REPO / "benchmarks" / "results" / f"adr_spade3d_box_offset_seed
 PREPARATION_S = 100.0
 
 
-def tasks(cells: list[dict], preparation_s: float) -> list[tuple[str, str, float]]:
-    """(experiment, task, seconds) of every task: each experiment's preparation and learning runs."""
+def tasks(cells: list[dict], preparation_s: Callable[[dict], float]) -> list[tuple[str, str, float]]:
+    """(experiment, task, seconds) of every task: each experiment's preparation (``preparation_s``
+    of one of its cells) and learning runs."""
     experiments = sorted({(c["tool"], c["robot"], c["demo"]) for c in cells})
     found = []
     for experiment in experiments:
         name = "-".join(experiment)
-        found.append((name, "prepare", preparation_s))
-        for cell in cells:
-            if (cell["tool"], cell["robot"], cell["demo"]) != experiment or cell["wall_time_s"] <= 0:
+        ours = [cell for cell in cells if (cell["tool"], cell["robot"], cell["demo"]) == experiment]
+        preparation = preparation_s(ours[0])
+        found.append((name, "prepare", preparation))
+        for cell in ours:
+            if cell["wall_time_s"] <= 0:
                 continue  # the tool alone and the trajectory: measured in the preparation
-            seconds = cell["wall_time_s"] - preparation_s if cell["method"] == "final" else cell["wall_time_s"]
+            seconds = cell["wall_time_s"] - preparation if cell["method"] == "final" else cell["wall_time_s"]
             found.append((name, cell["method"], seconds))
     return found
+
+
+def measured_preparation(folder: Path | None, default_s: float) -> Callable[[dict], float]:
+    """A cell's experiment's alignment and trajectory stage times from ``folder``/<experiment>/method/run.json
+    (a reproduction's seed folder), ``default_s`` where it is not there."""
+
+    def seconds(cell: dict) -> float:
+        if folder is None:
+            return default_s
+        run = folder / "-".join((cell["tool"], cell["world"], cell["robot"], cell["demo"])) / "method" / "run.json"
+        if not run.is_file():
+            return default_s
+        stages = json.loads(run.read_text())["stage_times_s"]
+        return float(stages.get("alignment", 0.0) + stages.get("trajectory", 0.0))
+
+    return seconds
+
+
+def first_seed_cells(path: Path) -> tuple[int, list[dict]]:
+    """The first seed of a results.json and its cells' records."""
+    _, runs = read_results(json.loads(path.read_text()))
+    seed = min(runs)
+    return seed, [cell.record() for cell in runs[seed]]
 
 
 def for_seeds(work: list[tuple[str, str, float]], seeds: int) -> list[tuple[str, str, float]]:
@@ -113,16 +144,27 @@ def main() -> None:
     parser.add_argument("--cpus", type=int, default=2, help="CPUs per node (one learning run each)")
     parser.add_argument("--prep-s", type=float, default=PREPARATION_S, help="an experiment's preparation, s")
     parser.add_argument("--results", type=Path, default=RESULTS)
+    parser.add_argument("--fill-from", type=Path, help="a results.json whose cells fill those --results lacks")
+    parser.add_argument(
+        "--preparations", type=Path, help="a reproduction's seed folder with each experiment's run.json"
+    )
     args = parser.parse_args()
-    _, runs = read_results(json.loads(args.results.read_text()))
-    seed = min(runs)
-    cells = [cell.record() for cell in runs[seed]]
-    work = tasks(cells, args.prep_s)
+    seed, cells = first_seed_cells(args.results)
+    print(f"{_shown(args.results)}: seed {seed}'s {len(cells)} cells")
+    if args.fill_from is not None:
+        key = ("tool", "world", "robot", "demo", "method")
+        have = {tuple(cell[k] for k in key) for cell in cells}
+        other_seed, others = first_seed_cells(args.fill_from)
+        filled = [cell for cell in others if tuple(cell[k] for k in key) not in have]
+        cells += filled
+        print(f"  and {len(filled)} cells it lacks from {_shown(args.fill_from)} (seed {other_seed})")
+    work = tasks(cells, measured_preparation(args.preparations, args.prep_s))
     total = sum(seconds for _, _, seconds in work)
+    preparations = [seconds for _, task, seconds in work if task == "prepare"]
     print(
-        f"{args.results.relative_to(REPO) if args.results.is_relative_to(REPO) else args.results}: seed {seed}'s "
-        f"{len(cells)} cells, {len(work)} tasks ({sum(w[1] == 'prepare' for w in work)} preparations of "
-        f"{args.prep_s:.0f} s), {total / 3600:.2f} h of work a seed; {args.seeds} seeds: {args.seeds * total / 3600:.2f} h"
+        f"{len(work)} tasks ({len(preparations)} preparations, {sum(preparations) / 3600:.2f} h: "
+        f"{'measured in ' + _shown(args.preparations) if args.preparations else f'{args.prep_s:.0f} s each'}), "
+        f"{total / 3600:.2f} h of work a seed; {args.seeds} seeds: {args.seeds * total / 3600:.2f} h"
     )
     local = children(cells)
     print(
@@ -147,6 +189,10 @@ def main() -> None:
     for folder in ADR_RUNS:
         record = json.loads((folder / "learning.json").read_text())
         print(f"  {folder.relative_to(REPO)}: {record['env_steps']:,} env steps, {record['wall_time_s'] / 60:.1f} min")
+
+
+def _shown(path: Path) -> str:
+    return str(path.relative_to(REPO) if path.is_absolute() and path.is_relative_to(REPO) else path)
 
 
 if __name__ == "__main__":
