@@ -17,8 +17,9 @@ point estimate (the mean), and anywhere within their interval (possibly). It **h
 items meet it firmly; it **holds on the means** when enough do on the means but some of their
 intervals reach past the test; it **could hold** when too few do on the means but enough could
 within their intervals; else it **does not hold**. Without an interval (one run) an item's three
-readings are its value's. An interval from few seeds is too narrow (:mod:`~toolimit.experiments.intervals`),
-so "holds" on three seeds is itself a reading with that limit.
+readings are its value's. An interval from few seeds is too narrow
+(:mod:`~toolimit.experiments.intervals`), so "holds" on three seeds is itself a reading with that
+limit.
 """
 
 from __future__ import annotations

@@ -3,15 +3,16 @@
 ``results.json`` holds the preset, ``seeds`` (those with cells), ``cells`` (each a
 :class:`~toolimit.experiments.cells.CellResult` record with its ``seed``: ``tool``, ``demo``,
 ``robot``, ``method``, ``goal_reward``, ``success_rate``, ...), ``summary`` (each cell over its
-seeds, :class:`~toolimit.experiments.summary.CellSummary`), ``aggregates`` (each method over
-its demonstrations, :class:`~toolimit.experiments.summary.MethodSummary`) and ``claims`` (the
-paper's claims read off them, :class:`~toolimit.experiments.claims.ClaimReading`). A ``results.json``
+seeds, :class:`~toolimit.experiments.summary.CellSummary`), ``aggregates`` (each method over its
+demonstrations, :class:`~toolimit.experiments.summary.MethodSummary`) and ``claims`` (the paper's
+claims read off them, :class:`~toolimit.experiments.claims.ClaimReading`). A ``results.json``
 written before there were seeds (a ``preset`` with its ``seed``, cells without) reads as that one
 seed's (:func:`read_results`). The first table has one row per experiment and one column per
 method, "goal reward [95 % interval] (success [95 % interval])"; the second one row per method of
-a tool, world and robot over its demonstrations; the third one row per claim and group. The figure is the paper's: one group of bars per
-experiment, the goal reward on a log scale with its interval, the success threshold drawn; one
-figure per tool, since the goal rewards of different tools do not compare.
+a tool, world and robot over its demonstrations; the third one row per claim and group. The figure
+is the paper's: one group of bars per experiment, the goal reward on a log scale with its interval,
+the success threshold drawn; one figure per tool, since the goal rewards of different tools do not
+compare.
 """
 
 from __future__ import annotations
