@@ -54,3 +54,25 @@ def test_braking_stops_inside_the_range_without_passing_the_acceleration_bound()
     assert q[0, 0] <= 1.0 and q[0, 0] > 0.99  # reaches the end, stops there
     assert changes.max() <= 5.0 * (1 + 1e-9), "braking never exceeds the acceleration bound"
     assert path[-1] == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("speed", [None, 3.0])
+def test_following_a_path_is_stepping_towards_each_next_sample_from_rest(speed: float | None) -> None:
+    """``follow`` (stage iii's projection, compiled) gives what stepping one sample at a time
+    gives, bit for bit, with and without an acceleration bound; a batch steps each row alone."""
+    bound = MotionBound.of(make_robot("panda"), speed=speed)
+    rng = np.random.default_rng(4)
+    middle = (bound.lower + bound.upper) / 2
+    path = middle + np.cumsum(rng.normal(0.0, 0.15, (60, 7)), axis=0)  # runs into the range's ends too
+    path[0] = middle
+    stepped, velocity = [path[0]], np.zeros((1, 7))
+    for sample in path[1:]:
+        q, velocity = bound.step(stepped[-1][None], velocity, (sample - stepped[-1])[None] / DT, DT)
+        stepped.append(q[0])
+    np.testing.assert_array_equal(bound.follow(path, DT), np.array(stepped))
+    rows = rng.uniform(bound.lower, bound.upper, (5, 7)), rng.normal(0, 2, (5, 7)), rng.normal(0, 3, (5, 7))
+    batch = bound.step(*rows, DT)
+    for b in range(5):
+        one = bound.step(*(r[b : b + 1] for r in rows), DT)
+        np.testing.assert_array_equal(batch[0][b], one[0][0])
+        np.testing.assert_array_equal(batch[1][b], one[1][0])

@@ -8,13 +8,15 @@ from which braking at that acceleration stops inside the position range. A motio
 it is one the robot can execute at its own timing: :mod:`toolimit.deploy.export` streams it with no
 slowing down. For a robot with published limits (:mod:`toolimit.robots.limits`) the bound is those
 limits within the export's margins; for the others, the model's position and velocity limits with
-no acceleration bound (none is published).
+no acceleration bound (none is published). The step is compiled (numba, cached on disk like
+:mod:`toolimit.rotations`): stage iii steps every path it tries through it, one sample at a time.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from toolimit.robots.limits import SUPPORTED_ROBOTS, JointLimits, Margins, published_limits
@@ -80,19 +82,23 @@ class MotionBound:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The joints (B, N) rad and their velocity (B, N) rad/s after one step of ``dt`` s from
         ``q`` (B, N) moving at ``previous`` (B, N), commanded ``commanded`` (B, N) rad/s."""
-        velocity = np.clip(commanded, -self.velocity, self.velocity)
-        if self.acceleration is not None:
-            change = self.acceleration * dt
-            slowest, fastest = previous - change, previous + change
-            # never faster towards a range's end than braking at the bound stops before it; braking
-            # harder than the bound allows is never asked
-            up = _braking_speed(np.maximum(self.upper - q, 0.0), change, dt)
-            down = _braking_speed(np.maximum(q - self.lower, 0.0), change, dt)
-            fastest = np.minimum(fastest, np.maximum(up, slowest))
-            slowest = np.maximum(slowest, np.minimum(-down, fastest))
-            velocity = np.clip(velocity, slowest, fastest)
-        moved = np.clip(q + velocity * dt, self.lower, self.upper)
-        return moved, (moved - q) / dt
+        q, previous, commanded = (np.ascontiguousarray(a, dtype=float) for a in (q, previous, commanded))
+        moved, velocity = np.empty_like(q), np.empty_like(q)
+        _step_rows(q, previous, commanded, float(dt), *self._arrays(), moved, velocity)
+        return moved, velocity
+
+    def follow(self, path: np.ndarray, dt: float) -> np.ndarray:
+        """(T+1, N) rad: the joints stepped from ``path[0]`` at rest, each step commanding the
+        velocity that reaches the path's next sample, ``path`` (T+1, N) rad, one sample every ``dt`` s."""
+        return _follow(np.ascontiguousarray(path, dtype=float), float(dt), *self._arrays())
+
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
+        """The compiled step's bound: range, velocity, acceleration (zeros when unbounded), bounded."""
+        unbounded = np.zeros_like(self.velocity) if self.acceleration is None else self.acceleration
+        lower, upper, velocity, acceleration = (
+            np.ascontiguousarray(a, dtype=float) for a in (self.lower, self.upper, self.velocity, unbounded)
+        )
+        return lower, upper, velocity, acceleration, self.acceleration is not None
 
     def braking(self, q: np.ndarray, dt: float) -> np.ndarray:
         """(K, N) joint samples, one every ``dt`` s, that continue the path q (T+1, N) rad from its last
@@ -120,10 +126,51 @@ def motion_from_rest(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     return velocity, np.diff(np.concatenate([at_rest, velocity], axis=-2), axis=-2) / dt
 
 
-def _braking_speed(room: np.ndarray, change: np.ndarray, dt: float) -> np.ndarray:
+_jit = nb.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+
+
+@_jit
+def _braking_speed(room, change, dt):  # type: ignore[no-untyped-def]
     """The largest speed (rad/s) for this step from which slowing by ``change`` rad/s every step
     after it moves at most ``room`` rad in all: the steps' speeds v, v - u, v - 2u, ... (u =
     ``change``) over their positive part, each for ``dt`` s. The n + 1 steps of a speed in
     [n u, (n + 1) u] cover dt ((n + 1) v - u n (n + 1) / 2); n is the most whole steps of u that fit."""
     whole = np.floor((np.sqrt(1.0 + 8.0 * room / (dt * change)) - 1.0) / 2.0)
     return (room / dt + change * whole * (whole + 1.0) / 2.0) / (whole + 1.0)
+
+
+@_jit
+def _step_rows(q, previous, commanded, dt, lower, upper, velocity, acceleration, bounded, moved, moved_velocity):  # type: ignore[no-untyped-def]
+    """:meth:`MotionBound.step` of every row of q, previous, commanded (B, N) into moved and
+    moved_velocity (B, N): the commanded velocity within the velocity bound; with ``bounded``,
+    within ``acceleration * dt`` of the previous one and never faster towards a range's end than
+    braking at the bound stops before it (braking harder than the bound allows is never asked);
+    the move within the range."""
+    for b in range(q.shape[0]):
+        for j in range(q.shape[1]):
+            v = min(max(commanded[b, j], -velocity[j]), velocity[j])
+            if bounded:
+                change = acceleration[j] * dt
+                slowest, fastest = previous[b, j] - change, previous[b, j] + change
+                up = _braking_speed(max(upper[j] - q[b, j], 0.0), change, dt)
+                down = _braking_speed(max(q[b, j] - lower[j], 0.0), change, dt)
+                fastest = min(fastest, max(up, slowest))
+                slowest = max(slowest, min(-down, fastest))
+                v = min(max(v, slowest), fastest)
+            moved[b, j] = min(max(q[b, j] + v * dt, lower[j]), upper[j])
+            moved_velocity[b, j] = (moved[b, j] - q[b, j]) / dt
+
+
+@_jit
+def _follow(path, dt, lower, upper, velocity, acceleration, bounded):  # type: ignore[no-untyped-def]
+    """:meth:`MotionBound.follow`."""
+    followed = path.copy()
+    n = path.shape[1]
+    previous, moved, moved_velocity = np.zeros((1, n)), np.empty((1, n)), np.empty((1, n))
+    bound = (lower, upper, velocity, acceleration, bounded)
+    for t in range(1, path.shape[0]):
+        commanded = (path[t : t + 1] - followed[t - 1 : t]) / dt
+        _step_rows(followed[t - 1 : t], previous, commanded, dt, *bound, moved, moved_velocity)
+        followed[t] = moved[0]
+        previous[:] = moved_velocity
+    return followed

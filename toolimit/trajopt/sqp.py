@@ -137,12 +137,7 @@ def project_to_limits(q: np.ndarray, dt: float, bound: MotionBound) -> np.ndarra
     q = np.asarray(q, dtype=float)
     if bound.holds(q, dt):
         return q.copy()
-    projected = q.copy()
-    velocity = np.zeros((1, q.shape[1]))
-    for t in range(1, len(q)):
-        moved, velocity = bound.step(projected[t - 1 : t], velocity, (q[t : t + 1] - projected[t - 1 : t]) / dt, dt)
-        projected[t] = moved[0]
-    return projected
+    return bound.follow(q, dt)
 
 
 class _TrackingQp:
