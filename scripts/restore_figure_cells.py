@@ -17,6 +17,7 @@ from pathlib import Path
 from toolimit.artifacts import save_json
 from toolimit.experiments.cells import Experiment
 from toolimit.experiments.report import RESULTS_JSON, read_results
+from toolimit.experiments.reproduce import seed_folder
 
 
 def restore(results: Path, out: Path) -> int:
@@ -24,7 +25,7 @@ def restore(results: Path, out: Path) -> int:
     preset, runs = read_results(json.loads(results.read_text()))
     written = 0
     for seed, cells in runs.items():
-        folder = out / f"seed_{seed}"
+        folder = seed_folder(out, seed)
         for cell in cells:
             key = Experiment(cell.tool, cell.world, cell.robot, Path(cell.demo)).cell_key(cell.method)
             save_json(folder / "cells" / f"{key}.json", cell.record())

@@ -7,6 +7,8 @@ import importlib.util
 import json
 from pathlib import Path
 
+import numpy as np
+
 from toolimit.experiments.cells import CellResult, Experiment
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "restore_figure_cells.py"
@@ -20,8 +22,6 @@ def _script():
 
 
 def test_each_seeds_cells_are_written_as_the_reproduction_saves_them(tmp_path):
-    import numpy as np
-
     experiment = Experiment("spade", "3d", "panda", Path("data/demos/spade_00.npz"))
     cells = {
         seed: CellResult.of(experiment, "final", np.array([20.0, 10.0 + seed]), np.array([True, seed == 1]))

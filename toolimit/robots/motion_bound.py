@@ -14,6 +14,7 @@ no acceleration bound (none is published). The step is compiled (numba, cached o
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numba as nb
@@ -84,16 +85,18 @@ class MotionBound:
         ``q`` (B, N) moving at ``previous`` (B, N), commanded ``commanded`` (B, N) rad/s."""
         q, previous, commanded = (np.ascontiguousarray(a, dtype=float) for a in (q, previous, commanded))
         moved, velocity = np.empty_like(q), np.empty_like(q)
-        _step_rows(q, previous, commanded, float(dt), *self._arrays(), moved, velocity)
+        _step_rows(q, previous, commanded, float(dt), *self._compiled, moved, velocity)
         return moved, velocity
 
     def follow(self, path: np.ndarray, dt: float) -> np.ndarray:
         """(T+1, N) rad: the joints stepped from ``path[0]`` at rest, each step commanding the
         velocity that reaches the path's next sample, ``path`` (T+1, N) rad, one sample every ``dt`` s."""
-        return _follow(np.ascontiguousarray(path, dtype=float), float(dt), *self._arrays())
+        return _follow(np.ascontiguousarray(path, dtype=float), float(dt), *self._compiled)
 
-    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
-        """The compiled step's bound: range, velocity, acceleration (zeros when unbounded), bounded."""
+    @functools.cached_property
+    def _compiled(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
+        """The compiled step's bound: range, velocity, acceleration (zeros when unbounded), bounded;
+        made once per bound, not at every step of the learner's simulator."""
         unbounded = np.zeros_like(self.velocity) if self.acceleration is None else self.acceleration
         lower, upper, velocity, acceleration = (
             np.ascontiguousarray(a, dtype=float) for a in (self.lower, self.upper, self.velocity, unbounded)
