@@ -7,6 +7,7 @@ the aggregation.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -114,6 +115,21 @@ def test_a_cell_missing_from_one_seed_says_how_many_seeds_it_has(tmp_path: Path)
     assert lfd.strip().endswith(", 2 of 3 seeds") and "of 3 seeds" not in row.split("|")[2]
     lfd_runs = next(a for a in summarise_methods(runs) if a.method == "lfd")
     assert lfd_runs.runs == 2 and lfd_runs.improvement_demos == ["spade_03"]
+
+
+def test_an_export_replayed_on_fewer_seeds_says_on_how_many(tmp_path: Path) -> None:
+    experiment = Experiment("spade", "3d", "panda", Path("spade_00.npz"))
+    replayed = {"goal_reward": [15.0, 3.0], "successes": [True, False], "success_rate": 0.5, "episodes": 2}
+    runs = {
+        seed: [dataclasses.replace(made_up_cell(experiment, "final", seed), exported=replayed if seed < 2 else None)]
+        for seed in (0, 1, 2)
+    }
+    write_results(tmp_path, runs, {"name": "full", "quick": False, "settings_changes": {}})
+    (summary,) = json.loads((tmp_path / "results.json").read_text())["summary"]
+    assert summary["exported_seeds"] == [0, 1] and summary["exported_success"]["value"] == 0.5
+    row = (tmp_path / "results.md").read_text().split("| spade | 3d | panda | spade_00 |")[1].splitlines()[0]
+    final, exported = row.split("|")[2], row.split("|")[-2]
+    assert exported.strip().endswith(", 2 of 3 seeds") and "seeds" not in final
 
 
 def test_the_seeds_of_a_cell_average_their_means() -> None:

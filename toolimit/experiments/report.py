@@ -64,7 +64,7 @@ def markdown_table(summaries: Sequence[CellSummary], seeds: Sequence[int]) -> st
     for experiment, by_method in _by_experiment(summaries).items():
         values = [_cell(by_method[m], len(seeds)) if m in by_method else "-" for m in METHODS]
         final = by_method.get(METHOD)
-        values += [_limits(final), _exported(final)]
+        values += [_limits(final), _exported(final, len(seeds))]
         lines.append("| " + " | ".join(experiment) + " | " + " | ".join(values) + " |")
     return "\n".join(lines) + "\n"
 
@@ -95,8 +95,12 @@ def _outcome(goal_reward: Interval, success: Interval) -> str:
 
 
 def _cell(summary: CellSummary, seeds: int) -> str:
-    fewer = f", {len(summary.seeds)} of {seeds} seeds" if len(summary.seeds) < seeds else ""
-    return _outcome(summary.goal_reward, summary.success) + fewer
+    return _outcome(summary.goal_reward, summary.success) + _fewer(summary.seeds, seeds)
+
+
+def _fewer(measured: Sequence[int], seeds: int) -> str:
+    """ ", k of n seeds" when fewer than the figure's ``seeds`` measured a column, else ""."""
+    return f", {len(measured)} of {seeds} seeds" if len(measured) < seeds else ""
 
 
 def _limits(final: CellSummary | None) -> str:
@@ -109,11 +113,12 @@ def _limits(final: CellSummary | None) -> str:
     return f"{_interval(final.steps_past_limits, 2)} ({ratios})"
 
 
-def _exported(final: CellSummary | None) -> str:
-    """The export's open-loop outcome, "-" with no export."""
+def _exported(final: CellSummary | None, seeds: int) -> str:
+    """The export's open-loop outcome with the number of seeds where fewer than ``seeds`` replayed
+    it, "-" with no export."""
     if final is None or final.exported_goal_reward is None or final.exported_success is None:
         return "-"
-    return _outcome(final.exported_goal_reward, final.exported_success)
+    return _outcome(final.exported_goal_reward, final.exported_success) + _fewer(final.exported_seeds, seeds)
 
 
 def _by_experiment(summaries: Sequence[CellSummary]) -> dict[tuple[str, str, str, str], dict[str, CellSummary]]:

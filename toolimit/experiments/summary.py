@@ -47,6 +47,7 @@ class CellSummary:
             recorded, or the robot publishes no acceleration limit).
         exported_goal_reward, exported_success: the final policy's export replayed open-loop, 95 %
             interval (None: no export).
+        exported_seeds: the seeds whose export was replayed.
         wall_time_s: the seeds' wall times added up.
     """
 
@@ -64,6 +65,7 @@ class CellSummary:
     max_acceleration_ratio: float | None
     exported_goal_reward: Interval | None
     exported_success: Interval | None
+    exported_seeds: list[int]
     wall_time_s: float
 
     @property
@@ -152,6 +154,7 @@ def _summarise(experiment: tuple[str, str, str, str], method: str, by_seed: dict
         max_acceleration_ratio=None if not limits or None in accelerations else max(accelerations),
         exported_goal_reward=seed_episode_interval([r["goal_reward"] for r in exported]) if exported else None,
         exported_success=seed_episode_interval([_exported_successes(r) for r in exported]) if exported else None,
+        exported_seeds=[seed for seed, cell in by_seed.items() if cell.exported is not None],
         wall_time_s=sum(cell.wall_time_s for cell in cells),
     )
 

@@ -11,10 +11,13 @@ constant, only the bounds change):
 * joint limits ``lower <= q_t + dq_t <= upper``;
 * velocity limits ``|(q_t + dq_t - q_{t-1} - dq_{t-1}) / dt| <= vlim`` (``dq_0 = 0``);
 * for a bound with an acceleration limit (:class:`~toolimit.robots.motion_bound.MotionBound`:
-  robots with published limits), ``|(q_{t+1} - 2 q_t + q_{t-1}) / dt^2| <= alim`` with the arm at
-  rest before the start (``q_{-1} = q_0``), so that the robot can execute the trajectory at its
-  timing (on the control grid, where learning replays it, the resampled steps keep the bound when
-  dt is the control step).
+  robots with published limits), the velocity change of each step
+  ``|(q_{t+1} - 2 q_t + q_{t-1}) / dt| <= alim dt`` with the arm at rest before the start
+  (``q_{-1} = q_0``), so that the robot can execute the trajectory at its timing (on the control
+  grid, where learning replays it, the resampled steps keep the bound when dt is the control step).
+  These rows are in rad/s, as the velocity rows are, so that OSQP's absolute tolerance means the
+  same on both; in rad/s^2 it would be 1/dt times tighter on them, for no better trajectory and
+  about twice the ADMM iterations (docs/results/performance.md).
 
 The bounds are the problem's ``bound``: positions, velocities and accelerations the learning
 environment also holds the robot to.
@@ -177,7 +180,8 @@ class _TrackingQp:
         self._base_tri = (base_i, base_j)
 
         # Constraints: positions (identity on dq), velocity differences / dt, and for a bound with
-        # an acceleration limit the second differences / dt^2 (dq_0 = 0, at rest before the start).
+        # an acceleration limit the second differences / dt, velocity changes (dq_0 = 0, at rest
+        # before the start).
         dt = problem.dt
         size = n * horizon
         blocks = [
@@ -189,7 +193,7 @@ class _TrackingQp:
                 sp.diags(
                     [np.ones(size), -2.0 * np.ones(size - n), np.ones(size - 2 * n)], [0, -n, -2 * n], format="csc"
                 )
-                / dt**2
+                / dt
             )
         steps_block = sp.vstack(blocks, format="csc")
         self.A = sp.hstack([sp.csc_matrix((steps_block.shape[0], nb)), steps_block], format="csc")
@@ -374,10 +378,11 @@ def _qp_step(
     velocity = at.velocity
     lows = [bound.lower - at.q[1:], -bound.velocity - velocity]
     ups = [bound.upper - at.q[1:], bound.velocity - velocity]
-    if bound.acceleration is not None:
-        acceleration = np.diff(np.vstack([np.zeros((1, problem.n_joints)), velocity]), axis=0) / problem.dt
-        lows.append(-bound.acceleration - acceleration)
-        ups.append(bound.acceleration - acceleration)
+    if bound.acceleration is not None:  # velocity changes per step, rad/s (module docstring)
+        velocity_change = np.diff(np.vstack([np.zeros((1, problem.n_joints)), velocity]), axis=0)
+        largest_change = bound.acceleration * problem.dt
+        lows.append(-largest_change - velocity_change)
+        ups.append(largest_change - velocity_change)
     bound_low = np.concatenate([low.ravel() for low in lows])
     bound_up = np.concatenate([up.ravel() for up in ups])
     step, used = qp.solve(qp.hessian_values(models, damping), qp.gradient(models), bound_low, bound_up)
