@@ -87,13 +87,15 @@ def test_an_arm_too_slow_for_the_strike_demonstrates_it_slower(tmp_path: Path) -
 
 
 def test_the_panda_follows_the_scripted_scythe_draw_within_its_limits(tmp_path: Path) -> None:
-    """The draw along the patch (1.5 m/s after a run-up) asks more acceleration than the Panda has at
-    real time: within its limits the arm follows it at a slower pace and still cuts stalks in the
-    shipped task's replays (the earlier pulls, their handle end held below the blade, cut nothing at
-    any pace)."""
+    """The draw along the patch (1.5 m/s after a run-up) asks more acceleration than the Panda has:
+    within its limits the arm follows it at real time or a little slower and still cuts stalks in
+    the shipped task's replays (the earlier pulls, their handle end held below the blade, cut
+    nothing at any pace)."""
     lfd = kinesthetic_task(shipped_task("scythe", "3d"), tmp_path / "lfd", OPTIONS, (1.0,), seed=0, replays=2)
     record = json.loads((tmp_path / "lfd" / SELECTION_JSON).read_text())["candidates"][0]
-    assert record["time_scale"] <= 1.5 and record["robot_reward"] >= 4.0
+    by_scale = {float(scale): reward for scale, reward in record["robot_reward_by_time_scale"].items()}
+    assert record["time_scale"] <= 1.5 and record["robot_reward"] > 0
+    assert all(reward == 0.0 for scale, reward in by_scale.items() if scale < record["time_scale"])
     assert lfd.tool == "scythe"
 
 
