@@ -13,9 +13,9 @@ A kinesthetic demonstration solves the task on the robot: a person guiding the a
 as the arm needs. So when the robot's replay at the pipeline's time scales earns nothing, the
 motion is tracked again at each slower scale of stage iii's grid
 (:data:`~toolimit.trajopt.time_scale.TIME_SCALE_GRID`) in turn, and the first whose replay earns
-is kept. Measured on the shipped Panda hammer task: at real time the arm cannot follow the
-2 m/s strikes (its replays plant no nail at time scales 1 to 2.5); at 3 it plants the nail in every
-replay. When no pace earns, there is no demonstration: NoKinestheticDemonstration. The result is a
+is kept (the Panda, within its acceleration limits, cannot follow the hammer's 2 m/s strikes at
+real time; ``selection.json`` lists the reward of every pace tried). When no pace earns, there is
+no demonstration: NoKinestheticDemonstration. The result is a
 :class:`~toolimit.learn.task.LearningTask` in the same scene, learnt from exactly as the method's;
 its ``source`` names the demonstration's folder (``kinesthetic``) and, prefixed ``scene_``, where
 the scene parameters came from (the method task's own ``source``).
