@@ -57,7 +57,7 @@ import osqp
 import scipy.sparse as sp
 
 from toolimit.errors import InputError, SolverFailure
-from toolimit.robots.motion_bound import MotionBound
+from toolimit.robots.motion_bound import MotionBound, motion_from_rest
 from toolimit.trajopt.costs import Iterate, QuadraticModel
 from toolimit.trajopt.problem import TrackingProblem
 
@@ -375,14 +375,12 @@ def _qp_step(
     The bounds keep q + dq within the joint limits and its velocities within theirs."""
     bound = problem.bound
     models = [term.model(at) for term in problem.terms]
-    velocity = at.velocity
+    velocity, acceleration = motion_from_rest(at.q, problem.dt)
     lows = [bound.lower - at.q[1:], -bound.velocity - velocity]
     ups = [bound.upper - at.q[1:], bound.velocity - velocity]
-    if bound.acceleration is not None:  # velocity changes per step, rad/s (module docstring)
-        velocity_change = np.diff(np.vstack([np.zeros((1, problem.n_joints)), velocity]), axis=0)
-        largest_change = bound.acceleration * problem.dt
-        lows.append(-largest_change - velocity_change)
-        ups.append(largest_change - velocity_change)
+    if bound.acceleration is not None:  # as velocity changes per step, rad/s (module docstring)
+        lows.append((-bound.acceleration - acceleration) * problem.dt)
+        ups.append((bound.acceleration - acceleration) * problem.dt)
     bound_low = np.concatenate([low.ravel() for low in lows])
     bound_up = np.concatenate([up.ravel() for up in ups])
     step, used = qp.solve(qp.hessian_values(models, damping), qp.gradient(models), bound_low, bound_up)
