@@ -79,6 +79,27 @@ def test_the_claim_that_beats_sparse_ppo_reads_the_probability_of_improvement() 
     assert claim({0: finals + level}, "beats sparse PPO", "spade").reading == "does not hold"  # P = 0.5
 
 
+def test_dense_ppo_is_comparable_when_it_succeeds_on_some_demonstration() -> None:
+    finals = [cell(f"spade_0{i}", "final", episodes(20), "spade") for i in range(3)]
+    dense = [cell("spade_00", "dense_ppo", episodes(17), "spade")]
+    dense += [cell(f"spade_0{i}", "dense_ppo", episodes(2), "spade") for i in (1, 2)]
+    reading = claim({0: finals + dense}, "dense PPO in some cases", "spade")
+    assert reading.required == 1 and reading.on_the_means == 1 and reading.failing == ["spade_01", "spade_02"]
+    assert reading.reading == "holds on the means"  # 0.85 over 20 episodes reaches below 0.8
+    never = [cell(f"spade_0{i}", "dense_ppo", episodes(0), "spade") for i in range(3)]
+    assert claim({0: finals + never}, "dense PPO in some cases", "spade").reading == "does not hold"
+
+
+def test_lfd_is_comparable_when_the_final_policy_at_least_draws_with_it() -> None:
+    finals = [cell(f"spade_0{i}", "final", episodes(20), "spade") for i in range(3)]
+    lfd = [cell(f"spade_0{i}", "lfd", episodes(20), "spade") for i in range(3)]
+    reading = claim({0: finals + lfd}, "LfD comparable", "spade")
+    assert reading.reading == "holds" and reading.test == "P(final > lfd) >= 0.5"  # every pair a tie
+    weaker = [cell(f"spade_0{i}", "final", episodes(4), "spade") for i in range(3)]
+    reading = claim({0: weaker + lfd}, "LfD comparable", "spade")
+    assert reading.reading == "does not hold" and reading.failing == ["P(final > lfd) on 3"]
+
+
 def test_no_claim_is_read_without_what_it_needs() -> None:
     baseline_only = {0: [cell("scythe_00", "lfd", episodes(20))]}
     assert read_claims(summarise_cells(baseline_only), summarise_methods(baseline_only)) == []
