@@ -5,8 +5,8 @@ with ``toolimit.viz`` (SVG, no plotting library), followed by the data's path, t
 made it and the commit it records. A chart whose JSON is missing or lacks a field fails the build
 (a results page that no longer matches its data is an error, not a warning). The paper's figure is
 drawn by ``toolimit.experiments.report.write_results`` itself from ``results.json`` (every seed's
-cells, or the one seed's of the figure measured before there were seeds) and compared with the
-committed SVG, so the committed chart cannot drift from its table.
+cells, or the one seed's of the figure measured before there were seeds; the figure within the
+limits and the one with the authors' span) and compared with the committed SVG, so the committed chart cannot drift from its table.
 """
 
 from __future__ import annotations
@@ -56,26 +56,20 @@ def _success_bars(labels: list[str], values: list[list[float | None]], series: l
     return log_bar_chart_svg(groups, series, title=title, y_label="success rate", threshold=0.8, floor=0.01)
 
 
-def paper_figure(tool: str) -> Chart:
-    """The figure of ``reproduce/results.json``, of either layout: one seed's cells (the figure
+def paper_figure(folder: str, tool: str) -> Chart:
+    """The figure of ``FOLDER/results.json``, of either layout: one seed's cells (the figure
     measured before there were seeds) or every seed's."""
     from toolimit.experiments.report import read_results, write_results
 
-    record = _load("reproduce/results.json")
+    record = _load(f"{folder}/results.json")
     preset, runs = read_results(record)
     with tempfile.TemporaryDirectory() as scratch:
         write_results(Path(scratch), runs, preset)
         svg = (Path(scratch) / f"results_{tool}.svg").read_text()
-    committed = (RESULTS / "reproduce" / f"results_{tool}.svg").read_text()
+    committed = (RESULTS / folder / f"results_{tool}.svg").read_text()
     if svg != committed:
-        raise ExtensionError(f"benchmarks/results/reproduce/results_{tool}.svg is not the chart of results.json")
-    seeds = ",".join(str(seed) for seed in sorted(runs))
-    return Chart(
-        svg,
-        "benchmarks/results/reproduce/results.json",
-        f"toolimit reproduce --seed {seeds} --jobs 2 --out runs/reproduce",
-        _commit(record),
-    )
+        raise ExtensionError(f"benchmarks/results/{folder}/results_{tool}.svg is not the chart of results.json")
+    return Chart(svg, f"benchmarks/results/{folder}/results.json", record["command"], _commit(record))
 
 
 def learning_grid() -> Chart:
@@ -218,9 +212,12 @@ def performance() -> Chart:
 
 
 CHARTS: dict[str, Callable[[], Chart]] = {
-    "paper_figure_spade": lambda: paper_figure("spade"),
-    "paper_figure_hammer": lambda: paper_figure("hammer"),
-    "paper_figure_scythe": lambda: paper_figure("scythe"),
+    "paper_figure_spade": lambda: paper_figure("figure_within_limits", "spade"),
+    "paper_figure_hammer": lambda: paper_figure("figure_within_limits", "hammer"),
+    "paper_figure_scythe": lambda: paper_figure("figure_within_limits", "scythe"),
+    "paper_figure_span_spade": lambda: paper_figure("reproduce", "spade"),
+    "paper_figure_span_hammer": lambda: paper_figure("reproduce", "hammer"),
+    "paper_figure_span_scythe": lambda: paper_figure("reproduce", "scythe"),
     "learning_grid": learning_grid,
     "adr": adr,
     "scythe": scythe,
