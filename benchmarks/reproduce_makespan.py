@@ -28,6 +28,10 @@ they are listed apart with their own wall time.
 
     python benchmarks/reproduce_makespan.py [--seeds 3] [--jobs 2] [--nodes 8] [--cpus 2] [--prep-s 100]
         [--results R.json] [--fill-from R.json] [--preparations runs/figure/seed_0]
+    python benchmarks/reproduce_makespan.py --each-seed --results R.json [--preparations runs/figure]
+
+``--each-seed`` takes every seed's own cells and preparations instead of the first seed's times
+for all: the measured work of a reproduction whose seeds are all in.
 """
 
 from __future__ import annotations
@@ -83,11 +87,35 @@ def measured_preparation(folder: Path | None, default_s: float) -> Callable[[dic
     return seconds
 
 
+def seed_cells(path: Path) -> dict[int, list[dict]]:
+    """Every seed of a results.json with its cells' records, in the seeds' order."""
+    _, runs = read_results(json.loads(path.read_text()))
+    return {seed: [cell.record() for cell in runs[seed]] for seed in sorted(runs)}
+
+
 def first_seed_cells(path: Path) -> tuple[int, list[dict]]:
     """The first seed of a results.json and its cells' records."""
-    _, runs = read_results(json.loads(path.read_text()))
-    seed = min(runs)
-    return seed, [cell.record() for cell in runs[seed]]
+    return next(iter(seed_cells(path).items()))
+
+
+def each_seed(args: argparse.Namespace) -> None:
+    """The schedules of every seed's own measured work (``--each-seed``): ``--preparations`` is the
+    reproduction's folder, holding each seed's ``seed_S/``."""
+    by_seed = seed_cells(args.results)
+    works = {}
+    for seed, cells in by_seed.items():
+        folder = args.preparations / f"seed_{seed}" if args.preparations is not None else None
+        works[seed] = tasks(cells, measured_preparation(folder, args.prep_s))
+        print(f"seed {seed}: {len(cells)} cells, {sum(w[2] for w in works[seed]) / 3600:.2f} h of work")
+    total = sum(w[2] for work in works.values() for w in work)
+    local = [seconds for cells in by_seed.values() for seconds in children(cells)]
+    print(
+        f"{len(by_seed)} seeds: {total / 3600:.2f} h; one node, --jobs {args.jobs}: {in_order(local, args.jobs) / 60:.0f} min"
+    )
+    every = [(f"seed_{seed}/{name}", task, seconds) for seed, work in works.items() for name, task, seconds in work]
+    for nodes in sorted({1, 2, 4, args.nodes}):
+        slots = nodes * args.cpus
+        print(f"{nodes} Ray node(s) x {args.cpus} CPUs, the seeds side by side: {makespan(every, slots) / 60:.1f} min")
 
 
 def for_seeds(work: list[tuple[str, str, float]], seeds: int) -> list[tuple[str, str, float]]:
@@ -148,7 +176,15 @@ def main() -> None:
     parser.add_argument(
         "--preparations", type=Path, help="a reproduction's seed folder with each experiment's run.json"
     )
+    parser.add_argument(
+        "--each-seed",
+        action="store_true",
+        help="every seed of --results with its own measured work (--preparations: the reproduction's folder)",
+    )
     args = parser.parse_args()
+    if args.each_seed:
+        each_seed(args)
+        return
     seed, cells = first_seed_cells(args.results)
     print(f"{_shown(args.results)}: seed {seed}'s {len(cells)} cells")
     if args.fill_from is not None:
