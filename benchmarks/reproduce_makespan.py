@@ -215,10 +215,11 @@ def main() -> None:
             f"one after another {args.seeds * makespan(work, slots) / 60:.1f} min, side by side "
             f"{makespan(every, slots) / 60:.1f} min"
         )
-    longest = max(work, key=lambda w: w[2] + (args.prep_s if w[1] != "prepare" else 0.0))
+    preparation_of = {name: seconds for name, task, seconds in work if task == "prepare"}
+    longest = max(work, key=lambda w: w[2] + (preparation_of[w[0]] if w[1] != "prepare" else 0.0))
     print(
         f"bounds from below, {args.seeds} seeds side by side on {args.nodes} x {args.cpus} CPUs: the longest single "
-        f"run, {longest[0]} {longest[1]}, {(longest[2] + args.prep_s) / 60:.1f} min with its preparation; the work "
+        f"run, {longest[0]} {longest[1]}, {(longest[2] + preparation_of[longest[0]]) / 60:.1f} min with its preparation; the work "
         f"per slot, {args.seeds * total / (args.nodes * args.cpus) / 60:.1f} min"
     )
     print("apart (one learning run each, not split by a cluster):")
