@@ -102,7 +102,7 @@ def each_seed(args: argparse.Namespace) -> None:
     """The schedules of every seed's own measured work (``--each-seed``): ``--preparations`` is the
     reproduction's folder, holding each seed's ``seed_S/``."""
     by_seed = seed_cells(args.results)
-    works = {}
+    works: dict[int, list[tuple[str, str, float]]] = {}
     for seed, cells in by_seed.items():
         folder = args.preparations / f"seed_{seed}" if args.preparations is not None else None
         works[seed] = tasks(cells, measured_preparation(folder, args.prep_s))
@@ -112,15 +112,15 @@ def each_seed(args: argparse.Namespace) -> None:
     print(
         f"{len(by_seed)} seeds: {total / 3600:.2f} h; one node, --jobs {args.jobs}: {in_order(local, args.jobs) / 60:.0f} min"
     )
-    every = [(f"seed_{seed}/{name}", task, seconds) for seed, work in works.items() for name, task, seconds in work]
+    every = for_seeds(works)
     for nodes in sorted({1, 2, 4, args.nodes}):
         slots = nodes * args.cpus
         print(f"{nodes} Ray node(s) x {args.cpus} CPUs, the seeds side by side: {makespan(every, slots) / 60:.1f} min")
 
 
-def for_seeds(work: list[tuple[str, str, float]], seeds: int) -> list[tuple[str, str, float]]:
-    """``work`` once per seed, each experiment named with its seed."""
-    return [(f"seed_{seed}/{name}", task, seconds) for seed in range(seeds) for name, task, seconds in work]
+def for_seeds(works: dict[int, list[tuple[str, str, float]]]) -> list[tuple[str, str, float]]:
+    """Every seed's ``work`` in one list, each experiment named with its seed."""
+    return [(f"seed_{seed}/{name}", task, seconds) for seed, work in works.items() for name, task, seconds in work]
 
 
 def children(cells: list[dict]) -> list[float]:
@@ -207,7 +207,7 @@ def main() -> None:
         f"one node, --jobs {args.jobs}: one seed {in_order(local, args.jobs) / 60:.0f} min, "
         f"{args.seeds} seeds {in_order(local * args.seeds, args.jobs) / 60:.0f} min"
     )
-    every = for_seeds(work, args.seeds)
+    every = for_seeds({seed: work for seed in range(args.seeds)})
     for nodes in sorted({1, 2, 4, args.nodes}):
         slots = nodes * args.cpus
         print(

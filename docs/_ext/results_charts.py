@@ -6,11 +6,13 @@ made it and the commit it records. A chart whose JSON is missing or lacks a fiel
 (a results page that no longer matches its data is an error, not a warning). The paper's figure is
 drawn by ``toolimit.experiments.report.write_results`` itself from ``results.json`` (every seed's
 cells, or the one seed's of the figure measured before there were seeds; the figure within the
-limits and the one with the authors' span) and compared with the committed SVG, so the committed chart cannot drift from its table.
+limits and the one with the authors' span) and compared with the committed SVG, so the committed
+chart cannot drift from its table.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import tempfile
 from collections.abc import Callable
@@ -56,16 +58,25 @@ def _success_bars(labels: list[str], values: list[list[float | None]], series: l
     return log_bar_chart_svg(groups, series, title=title, y_label="success rate", threshold=0.8, floor=0.01)
 
 
-def paper_figure(folder: str, tool: str) -> Chart:
-    """The figure of ``FOLDER/results.json``, of either layout: one seed's cells (the figure
-    measured before there were seeds) or every seed's."""
+@functools.cache
+def _figure_charts(folder: str) -> tuple[dict[str, Any], dict[str, str]]:
+    """The record of ``FOLDER/results.json`` and each tool's chart drawn from it, once per build:
+    the summaries behind them bootstrap every cell."""
     from toolimit.experiments.report import read_results, write_results
 
     record = _load(f"{folder}/results.json")
     preset, runs = read_results(record)
     with tempfile.TemporaryDirectory() as scratch:
-        write_results(Path(scratch), runs, preset)
-        svg = (Path(scratch) / f"results_{tool}.svg").read_text()
+        written = write_results(Path(scratch), runs, preset)
+        charts = {path.stem.removeprefix("results_"): path.read_text() for path in written if path.suffix == ".svg"}
+    return record, charts
+
+
+def paper_figure(folder: str, tool: str) -> Chart:
+    """The figure of ``FOLDER/results.json``, of either layout: one seed's cells (the figure
+    measured before there were seeds) or every seed's."""
+    record, charts = _figure_charts(folder)
+    svg = charts[tool]
     committed = (RESULTS / folder / f"results_{tool}.svg").read_text()
     if svg != committed:
         raise ExtensionError(f"benchmarks/results/{folder}/results_{tool}.svg is not the chart of results.json")
